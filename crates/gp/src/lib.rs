@@ -1,0 +1,13 @@
+//! # vicpilco-gp: the Gaussian-process engine of PILCO
+//!
+//! Multi-output GP regression (E independent GPs on shared inputs) with a squared-exponential
+//! ARD kernel, trained by maximising the log marginal likelihood, and **moment matching**:
+//! pushing a Gaussian input `x ~ N(m, s)` through the GP and returning the exact mean,
+//! covariance and input-output covariance of the output, with reverse-mode derivatives.
+//!
+//! This crate knows nothing of policies, costs, environments or the CLI.
+
+mod error;
+pub mod linalg;
+
+pub use error::{GpError, Result};

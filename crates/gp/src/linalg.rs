@@ -1,0 +1,184 @@
+//! The only module that touches the matrix crate's factorisations. Everything else asks for a
+//! [`Chol`] and calls its methods, so a change of back-end stays in this file.
+
+use crate::error::{GpError, Result};
+use faer::linalg::solvers::{DenseSolveCore, Solve};
+use faer::{Mat, MatRef, Side};
+
+/// A Cholesky factor `A = L Lᵀ` of a symmetric positive-definite matrix, with the jitter that
+/// had to be added to its diagonal to make the factorisation succeed (0 when none).
+#[derive(Clone, Debug)]
+pub struct Chol {
+    llt: faer::linalg::solvers::Llt<f64>,
+    /// Diagonal jitter added before factorising (0 when the matrix factorised as given).
+    pub jitter: f64,
+}
+
+/// How much jitter [`Chol::with_jitter`] may try: starting value relative to the mean
+/// diagonal, growth factor per retry, number of retries.
+#[derive(Clone, Copy, Debug)]
+pub struct JitterPolicy {
+    pub first_relative: f64,
+    pub growth: f64,
+    pub max_tries: usize,
+}
+
+impl Default for JitterPolicy {
+    fn default() -> Self {
+        Self {
+            first_relative: 1e-10,
+            growth: 10.0,
+            max_tries: 8,
+        }
+    }
+}
+
+impl Chol {
+    /// Factorise `a` exactly as given.
+    pub fn new(a: MatRef<'_, f64>, what: &str) -> Result<Self> {
+        match a.llt(Side::Lower) {
+            Ok(llt) => Ok(Self { llt, jitter: 0.0 }),
+            Err(e) => Err(GpError::NotPositiveDefinite {
+                what: what.to_string(),
+                pivot: pivot_of(&e),
+                jitter: 0.0,
+            }),
+        }
+    }
+
+    /// Factorise `a`, adding growing diagonal jitter when it is not numerically positive
+    /// definite. The jitter used is returned in [`Chol::jitter`] for the caller to report.
+    pub fn with_jitter(a: MatRef<'_, f64>, what: &str, policy: JitterPolicy) -> Result<Self> {
+        if let Ok(c) = Self::new(a, what) {
+            return Ok(c);
+        }
+        let n = a.nrows();
+        let mean_diag = (0..n).map(|i| a[(i, i)].abs()).sum::<f64>() / n.max(1) as f64;
+        let mut jitter = policy.first_relative * mean_diag.max(f64::MIN_POSITIVE);
+        let mut last_pivot = 0;
+        for _ in 0..policy.max_tries {
+            let mut b = a.to_owned();
+            for i in 0..n {
+                b[(i, i)] += jitter;
+            }
+            match b.llt(Side::Lower) {
+                Ok(llt) => {
+                    tracing::warn!(what, jitter, "Cholesky needed diagonal jitter");
+                    return Ok(Self { llt, jitter });
+                }
+                Err(e) => last_pivot = pivot_of(&e),
+            }
+            jitter *= policy.growth;
+        }
+        Err(GpError::NotPositiveDefinite {
+            what: what.to_string(),
+            pivot: last_pivot,
+            jitter: jitter / policy.growth,
+        })
+    }
+
+    pub fn dim(&self) -> usize {
+        self.llt.L().nrows()
+    }
+
+    /// The lower factor L.
+    pub fn l(&self) -> MatRef<'_, f64> {
+        self.llt.L()
+    }
+
+    /// `A⁻¹ B`.
+    pub fn solve(&self, b: MatRef<'_, f64>) -> Mat<f64> {
+        self.llt.solve(b)
+    }
+
+    /// `A⁻¹ b` for a vector.
+    pub fn solve_vec(&self, b: &[f64]) -> Vec<f64> {
+        let col = MatRef::from_column_major_slice(b, b.len(), 1);
+        let x = self.llt.solve(col);
+        (0..b.len()).map(|i| x[(i, 0)]).collect()
+    }
+
+    /// `log |A|`.
+    pub fn log_det(&self) -> f64 {
+        let l = self.llt.L();
+        2.0 * (0..l.nrows()).map(|i| l[(i, i)].ln()).sum::<f64>()
+    }
+
+    /// `A⁻¹`, for the formulas that need the explicit inverse (the GP variance term
+    /// `tr((K+σ²I)⁻¹Q)` and the likelihood gradient `K⁻¹ − ααᵀ`).
+    pub fn inverse(&self) -> Mat<f64> {
+        self.llt.inverse()
+    }
+}
+
+fn pivot_of(e: &faer::linalg::cholesky::llt::factor::LltError) -> usize {
+    match e {
+        faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => *index,
+    }
+}
+
+/// Check every entry of a matrix is finite; name the first offender.
+pub fn check_finite(a: MatRef<'_, f64>, what: &str) -> Result<()> {
+    for i in 0..a.nrows() {
+        for j in 0..a.ncols() {
+            let v = a[(i, j)];
+            if !v.is_finite() {
+                return Err(GpError::NonFinite {
+                    what: what.to_string(),
+                    row: i,
+                    col: j,
+                    value: v,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Symmetrise in place: `A ← (A + Aᵀ)/2`.
+pub fn symmetrise(a: &mut Mat<f64>) {
+    let n = a.nrows();
+    for i in 0..n {
+        for j in 0..i {
+            let v = 0.5 * (a[(i, j)] + a[(j, i)]);
+            a[(i, j)] = v;
+            a[(j, i)] = v;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn jitter_rescues_a_singular_matrix_and_reports_it() {
+        let a = Mat::<f64>::from_fn(3, 3, |_, _| 1.0);
+        assert!(Chol::new(a.as_ref(), "ones").is_err());
+        let c = Chol::with_jitter(a.as_ref(), "ones", JitterPolicy::default()).unwrap();
+        assert!(c.jitter > 0.0);
+    }
+
+    #[test]
+    fn not_positive_definite_error_names_the_matrix() {
+        let a = Mat::<f64>::from_fn(2, 2, |i, j| if i == j { -1.0 } else { 0.0 });
+        let err = Chol::with_jitter(a.as_ref(), "K_test", JitterPolicy::default()).unwrap_err();
+        assert!(err.to_string().contains("K_test"), "{err}");
+    }
+
+    #[test]
+    fn solve_inverse_and_logdet_agree() {
+        let a = Mat::<f64>::from_fn(3, 3, |i, j| if i == j { 3.0 } else { 0.5 });
+        let c = Chol::new(a.as_ref(), "a").unwrap();
+        let inv = c.inverse();
+        let prod = &a * &inv;
+        for i in 0..3 {
+            for j in 0..3 {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((prod[(i, j)] - want).abs() < 1e-14);
+            }
+        }
+        // det = (3-0.5)^2 (3+2*0.5) = 6.25*4
+        assert!((c.log_det() - (25.0f64).ln()).abs() < 1e-13);
+    }
+}
