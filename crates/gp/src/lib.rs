@@ -5,9 +5,15 @@
 //! pushing a Gaussian input `x ~ N(m, s)` through the GP and returning the exact mean,
 //! covariance and input-output covariance of the output, with reverse-mode derivatives.
 //!
-//! This crate knows nothing of policies, costs, environments or the CLI.
+//! Start from [`GpModel`] (exact GP). This crate knows nothing of policies, costs,
+//! environments or the CLI.
 
 mod error;
+pub mod fd;
+pub mod kernel;
 pub mod linalg;
+mod model;
 
 pub use error::{GpError, Result};
+pub use kernel::{Hyper, Kernel, SquaredExponential};
+pub use model::{validate_data, GpModel};

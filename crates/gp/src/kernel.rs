@@ -1,0 +1,183 @@
+//! Covariance functions.
+//!
+//! Hyper-parameters are stored as natural logarithms, the convention of PILCO and of the
+//! oracle: `log ℓ_1..log ℓ_D` (length-scales), `log σ_f` (signal standard deviation),
+//! `log σ_n` (noise standard deviation). The squared-exponential ARD kernel is
+//!
+//! `k(x, x') = σ_f² exp(-½ (x-x')ᵀ Λ⁻¹ (x-x'))`, `Λ = diag(ℓ_1², …, ℓ_D²)`,
+//!
+//! and training adds `σ_n² I`. Moment matching at uncertain inputs has a closed form only for
+//! this kernel, so the moment-matching code takes [`Hyper`] directly; training and plain
+//! prediction go through the [`Kernel`] trait so that other stationary kernels (Matérn) can be
+//! added without touching their callers.
+
+use faer::{Mat, MatRef};
+use serde::{Deserialize, Serialize};
+
+/// Log hyper-parameters of one output: ARD length-scales, signal and noise standard deviation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Hyper {
+    pub log_ls: Vec<f64>,
+    pub log_sf: f64,
+    pub log_sn: f64,
+}
+
+impl Hyper {
+    /// From PILCO's column layout `[log ℓ_1..log ℓ_D, log σ_f, log σ_n]`.
+    pub fn from_pilco(col: &[f64]) -> Self {
+        let d = col.len() - 2;
+        Self {
+            log_ls: col[..d].to_vec(),
+            log_sf: col[d],
+            log_sn: col[d + 1],
+        }
+    }
+
+    /// PILCO's column layout `[log ℓ_1..log ℓ_D, log σ_f, log σ_n]`.
+    pub fn to_pilco(&self) -> Vec<f64> {
+        let mut v = self.log_ls.clone();
+        v.push(self.log_sf);
+        v.push(self.log_sn);
+        v
+    }
+
+    pub fn dim(&self) -> usize {
+        self.log_ls.len()
+    }
+
+    /// Signal variance σ_f².
+    pub fn sf2(&self) -> f64 {
+        (2.0 * self.log_sf).exp()
+    }
+
+    /// Noise variance σ_n².
+    pub fn sn2(&self) -> f64 {
+        (2.0 * self.log_sn).exp()
+    }
+
+    /// `1/ℓ_d²` for every input dimension (the diagonal of Λ⁻¹).
+    pub fn inv_ls2(&self) -> Vec<f64> {
+        self.log_ls.iter().map(|l| (-2.0 * l).exp()).collect()
+    }
+
+    pub fn is_finite(&self) -> bool {
+        self.log_sf.is_finite()
+            && self.log_sn.is_finite()
+            && self.log_ls.iter().all(|v| v.is_finite())
+    }
+}
+
+/// A stationary covariance function with ARD length-scales and a signal variance.
+pub trait Kernel: Send + Sync + std::fmt::Debug {
+    fn name(&self) -> &'static str;
+
+    /// `k(a, b)` (no noise).
+    fn eval(&self, h: &Hyper, a: &[f64], b: &[f64]) -> f64;
+
+    /// `K(X, X)` (no noise), N×N.
+    fn gram(&self, h: &Hyper, x: MatRef<'_, f64>) -> Mat<f64> {
+        let n = x.nrows();
+        let rows: Vec<Vec<f64>> = (0..n).map(|i| row(x, i)).collect();
+        let mut k = Mat::zeros(n, n);
+        for i in 0..n {
+            for j in 0..=i {
+                let v = self.eval(h, &rows[i], &rows[j]);
+                k[(i, j)] = v;
+                k[(j, i)] = v;
+            }
+        }
+        k
+    }
+
+    /// `K(X1, X2)`, N1×N2.
+    fn cross(&self, h: &Hyper, x1: MatRef<'_, f64>, x2: MatRef<'_, f64>) -> Mat<f64> {
+        let r1: Vec<Vec<f64>> = (0..x1.nrows()).map(|i| row(x1, i)).collect();
+        let r2: Vec<Vec<f64>> = (0..x2.nrows()).map(|i| row(x2, i)).collect();
+        Mat::from_fn(x1.nrows(), x2.nrows(), |i, j| self.eval(h, &r1[i], &r2[j]))
+    }
+
+    /// `Σ_ij G_ij ∂K_ij/∂θ` for θ = (log ℓ_1..log ℓ_D, log σ_f), given `K = K(X,X)` (no
+    /// noise) and a symmetric N×N weight `G`: the contraction every likelihood gradient needs.
+    fn gram_grad_contract(
+        &self,
+        h: &Hyper,
+        x: MatRef<'_, f64>,
+        k: MatRef<'_, f64>,
+        g: MatRef<'_, f64>,
+    ) -> Vec<f64>;
+}
+
+/// The squared-exponential (Gaussian) kernel with ARD length-scales.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SquaredExponential;
+
+impl Kernel for SquaredExponential {
+    fn name(&self) -> &'static str {
+        "squared-exponential-ard"
+    }
+
+    fn eval(&self, h: &Hyper, a: &[f64], b: &[f64]) -> f64 {
+        let mut q = 0.0;
+        for ((ai, bi), l) in a.iter().zip(b).zip(&h.log_ls) {
+            let d = (ai - bi) * (-l).exp();
+            q += d * d;
+        }
+        h.sf2() * (-0.5 * q).exp()
+    }
+
+    fn gram(&self, h: &Hyper, x: MatRef<'_, f64>) -> Mat<f64> {
+        let (n, d) = (x.nrows(), x.ncols());
+        let il: Vec<f64> = h.log_ls.iter().map(|l| (-l).exp()).collect();
+        // Scale once so the pair loop is a plain squared distance.
+        let xs: Vec<f64> = (0..n)
+            .flat_map(|i| (0..d).map(move |c| (i, c)))
+            .map(|(i, c)| x[(i, c)] * il[c])
+            .collect();
+        let sf2 = h.sf2();
+        let mut k = Mat::zeros(n, n);
+        for i in 0..n {
+            let xi = &xs[i * d..(i + 1) * d];
+            k[(i, i)] = sf2;
+            for j in 0..i {
+                let xj = &xs[j * d..(j + 1) * d];
+                let q: f64 = xi.iter().zip(xj).map(|(a, b)| (a - b) * (a - b)).sum();
+                let v = sf2 * (-0.5 * q).exp();
+                k[(i, j)] = v;
+                k[(j, i)] = v;
+            }
+        }
+        k
+    }
+
+    fn gram_grad_contract(
+        &self,
+        h: &Hyper,
+        x: MatRef<'_, f64>,
+        k: MatRef<'_, f64>,
+        g: MatRef<'_, f64>,
+    ) -> Vec<f64> {
+        let (n, d) = (x.nrows(), x.ncols());
+        let il2 = h.inv_ls2();
+        // ∂K_ij/∂log ℓ_c = K_ij (x_ic - x_jc)² / ℓ_c²;  ∂K_ij/∂log σ_f = 2 K_ij.
+        let mut out = vec![0.0; d + 1];
+        let mut diag_sum = 0.0;
+        for i in 0..n {
+            diag_sum += g[(i, i)] * k[(i, i)];
+            for j in 0..i {
+                let w = 2.0 * g[(i, j)] * k[(i, j)];
+                diag_sum += w;
+                for c in 0..d {
+                    let dx = x[(i, c)] - x[(j, c)];
+                    out[c] += w * dx * dx * il2[c];
+                }
+            }
+        }
+        out[d] = 2.0 * diag_sum;
+        out
+    }
+}
+
+/// Row `i` of a matrix as a vector.
+pub fn row(x: MatRef<'_, f64>, i: usize) -> Vec<f64> {
+    (0..x.ncols()).map(|c| x[(i, c)]).collect()
+}

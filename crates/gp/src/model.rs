@@ -1,0 +1,157 @@
+//! The exact multi-output GP: E independent GPs on shared N×D training inputs, one
+//! hyper-parameter set per output, with the Cholesky factors and `β = (K + σ_n² I)⁻¹ y` cached.
+
+use crate::error::{GpError, Result};
+use crate::kernel::{row, Hyper, Kernel, SquaredExponential};
+use crate::linalg::{check_finite, Chol, JitterPolicy};
+use faer::{Mat, MatRef};
+use rayon::prelude::*;
+
+/// A fitted exact GP (E outputs).
+#[derive(Clone, Debug)]
+pub struct GpModel {
+    inputs: Mat<f64>,
+    targets: Mat<f64>,
+    hyp: Vec<Hyper>,
+    chol: Vec<Chol>,
+    /// N×E, column e is `(K_e + σ_ne² I)⁻¹ y_e`.
+    beta: Mat<f64>,
+    /// `(K_e + σ_ne² I)⁻¹` per output, needed by the model-uncertainty term of moment
+    /// matching.
+    inv_k: Vec<Mat<f64>>,
+}
+
+/// Check inputs, targets and hyper-parameters agree in shape and hold only finite numbers.
+pub fn validate_data(
+    inputs: MatRef<'_, f64>,
+    targets: MatRef<'_, f64>,
+    hyp: &[Hyper],
+) -> Result<()> {
+    check_finite(inputs, "GP training inputs")?;
+    check_finite(targets, "GP training targets")?;
+    if inputs.nrows() != targets.nrows() {
+        return Err(GpError::Shape {
+            what: "GP training targets".into(),
+            expected: format!("{} rows (one per input)", inputs.nrows()),
+            got: format!("{} rows", targets.nrows()),
+        });
+    }
+    if hyp.len() != targets.ncols() {
+        return Err(GpError::Shape {
+            what: "GP hyper-parameters".into(),
+            expected: format!("{} sets (one per output)", targets.ncols()),
+            got: format!("{}", hyp.len()),
+        });
+    }
+    for (e, h) in hyp.iter().enumerate() {
+        if h.dim() != inputs.ncols() {
+            return Err(GpError::Shape {
+                what: format!("length-scales of output {e}"),
+                expected: format!("{} (one per input dimension)", inputs.ncols()),
+                got: format!("{}", h.dim()),
+            });
+        }
+        if !h.is_finite() {
+            return Err(GpError::Numerical {
+                what: format!("hyper-parameters of output {e}"),
+                detail: format!("non-finite value in {:?}", h.to_pilco()),
+            });
+        }
+    }
+    Ok(())
+}
+
+impl GpModel {
+    /// Factorise `K_e + σ_ne² I` for each output (with reported jitter if needed).
+    pub fn new(inputs: Mat<f64>, targets: Mat<f64>, hyp: Vec<Hyper>) -> Result<Self> {
+        validate_data(inputs.as_ref(), targets.as_ref(), &hyp)?;
+        let kernel = SquaredExponential;
+        let n = inputs.nrows();
+        let per_output: Vec<Result<(Chol, Vec<f64>, Mat<f64>)>> = hyp
+            .par_iter()
+            .enumerate()
+            .map(|(e, h)| {
+                let mut k = kernel.gram(h, inputs.as_ref());
+                let sn2 = h.sn2();
+                for i in 0..n {
+                    k[(i, i)] += sn2;
+                }
+                let chol = Chol::with_jitter(
+                    k.as_ref(),
+                    &format!("K + sn2 I of output {e}"),
+                    JitterPolicy::default(),
+                )?;
+                let y: Vec<f64> = (0..n).map(|i| targets[(i, e)]).collect();
+                let beta = chol.solve_vec(&y);
+                let inv = chol.inverse();
+                Ok((chol, beta, inv))
+            })
+            .collect();
+        let mut chol = Vec::with_capacity(hyp.len());
+        let mut inv_k = Vec::with_capacity(hyp.len());
+        let mut beta = Mat::zeros(n, hyp.len());
+        for (e, r) in per_output.into_iter().enumerate() {
+            let (c, b, inv) = r?;
+            for i in 0..n {
+                beta[(i, e)] = b[i];
+            }
+            chol.push(c);
+            inv_k.push(inv);
+        }
+        Ok(Self {
+            inputs,
+            targets,
+            hyp,
+            chol,
+            beta,
+            inv_k,
+        })
+    }
+
+    pub fn n(&self) -> usize {
+        self.inputs.nrows()
+    }
+    pub fn input_dim(&self) -> usize {
+        self.inputs.ncols()
+    }
+    pub fn output_dim(&self) -> usize {
+        self.hyp.len()
+    }
+    pub fn inputs(&self) -> MatRef<'_, f64> {
+        self.inputs.as_ref()
+    }
+    pub fn targets(&self) -> MatRef<'_, f64> {
+        self.targets.as_ref()
+    }
+    pub fn hyp(&self) -> &[Hyper] {
+        &self.hyp
+    }
+    pub fn beta(&self) -> MatRef<'_, f64> {
+        self.beta.as_ref()
+    }
+    pub fn inv_k(&self) -> &[Mat<f64>] {
+        &self.inv_k
+    }
+    /// Diagonal jitter each output's factorisation needed (0 when none).
+    pub fn jitter(&self) -> Vec<f64> {
+        self.chol.iter().map(|c| c.jitter).collect()
+    }
+
+    /// Predictive mean and latent variance (no noise) of every output at a deterministic input.
+    pub fn predict(&self, x: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let kernel = SquaredExponential;
+        let n = self.n();
+        let mut mean = Vec::with_capacity(self.hyp.len());
+        let mut var = Vec::with_capacity(self.hyp.len());
+        for (e, h) in self.hyp.iter().enumerate() {
+            let kx: Vec<f64> = (0..n)
+                .map(|i| kernel.eval(h, &row(self.inputs.as_ref(), i), x))
+                .collect();
+            mean.push((0..n).map(|i| kx[i] * self.beta[(i, e)]).sum());
+            let v = self.chol[e].solve_vec(&kx);
+            let kk: f64 = kx.iter().zip(&v).map(|(a, b)| a * b).sum();
+            var.push((h.sf2() - kk).max(0.0));
+        }
+        (mean, var)
+    }
+}
