@@ -13,7 +13,8 @@ pub mod fd;
 pub mod kernel;
 pub mod linalg;
 mod model;
+pub mod moments;
 
 pub use error::{GpError, Result};
 pub use kernel::{Hyper, Kernel, SquaredExponential};
-pub use model::{validate_data, GpModel};
+pub use model::{validate_data, GpDataAdjoint, GpModel};

@@ -155,3 +155,69 @@ impl GpModel {
         (mean, var)
     }
 }
+
+/// Adjoints of a GP's data and hyper-parameters.
+#[derive(Clone, Debug)]
+pub struct GpDataAdjoint {
+    /// N×D.
+    pub inputs: Mat<f64>,
+    /// N×E.
+    pub targets: Mat<f64>,
+    /// One `[log ℓ_1..log ℓ_D, log σ_f, log σ_n]` per output (PILCO column layout).
+    pub hyp: Vec<Vec<f64>>,
+}
+
+impl GpModel {
+    /// Chain adjoints through `β_e = (K_e + σ_ne² I)⁻¹ y_e`: given `β̄` (N×E) and the direct
+    /// adjoints of the moment formulas (`centres`, `log_ls`, `log_sf` of
+    /// [`crate::moments::ParamAdjoint`]), return the total adjoints of inputs, targets and
+    /// hyper-parameters. With `ȳ = K̃⁻¹β̄` and `Ḡ = −½(ȳβᵀ + βȳᵀ)` (the gradient w.r.t. the
+    /// symmetric K̃), `∂K_ij/∂x_i = −K_ij Λ⁻¹(x_i − x_j)`, `∂K_ij/∂log ℓ_d = K_ij (x_id − x_jd)²/ℓ_d²`.
+    pub fn chain_param_adjoint(&self, direct: &crate::moments::ParamAdjoint) -> GpDataAdjoint {
+        let (n, d, e) = (self.n(), self.input_dim(), self.output_dim());
+        let kernel = SquaredExponential;
+        let mut inputs = direct.centres.clone();
+        let mut targets = Mat::zeros(n, e);
+        let mut hyp = Vec::with_capacity(e);
+        for a in 0..e {
+            let h = &self.hyp[a];
+            let bbar: Vec<f64> = (0..n).map(|i| direct.beta[(i, a)]).collect();
+            let ybar = self.chol[a].solve_vec(&bbar);
+            for i in 0..n {
+                targets[(i, a)] = ybar[i];
+            }
+            let k = kernel.gram(h, self.inputs.as_ref());
+            let il2 = h.inv_ls2();
+            let mut g_ls = vec![0.0; d];
+            let mut g_sf = 0.0;
+            let mut g_sn = 0.0;
+            for i in 0..n {
+                let gii = -ybar[i] * self.beta[(i, a)];
+                g_sf += 2.0 * gii * k[(i, i)];
+                g_sn += 2.0 * h.sn2() * gii;
+                for j in 0..i {
+                    // Ḡ_ij + Ḡ_ji
+                    let g2 = -(ybar[i] * self.beta[(j, a)] + self.beta[(i, a)] * ybar[j]);
+                    let gk = g2 * k[(i, j)];
+                    g_sf += 2.0 * gk;
+                    for c in 0..d {
+                        let dx = self.inputs[(i, c)] - self.inputs[(j, c)];
+                        g_ls[c] += gk * il2[c] * dx * dx;
+                        let dxi = -gk * il2[c] * dx;
+                        inputs[(i, c)] += dxi;
+                        inputs[(j, c)] -= dxi;
+                    }
+                }
+            }
+            let mut col: Vec<f64> = (0..d).map(|c| direct.log_ls[(c, a)] + g_ls[c]).collect();
+            col.push(direct.log_sf[a] + g_sf);
+            col.push(g_sn);
+            hyp.push(col);
+        }
+        GpDataAdjoint {
+            inputs,
+            targets,
+            hyp,
+        }
+    }
+}

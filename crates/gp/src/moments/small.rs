@@ -1,0 +1,94 @@
+//! Small dense helpers (D×D and N×D blocks) shared by the forward and backward passes.
+
+use crate::error::{GpError, Result};
+use crate::linalg::Chol;
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatRef, Par};
+
+/// Inverse and log-determinant of a small symmetric positive-definite matrix.
+pub(crate) fn spd_inverse_logdet(a: MatRef<'_, f64>, what: &str) -> Result<(Mat<f64>, f64)> {
+    let c = Chol::new(a, what)?;
+    let mut inv = c.inverse();
+    crate::linalg::symmetrise(&mut inv);
+    Ok((inv, c.log_det()))
+}
+
+/// `C = A B` (fresh matrix).
+pub(crate) fn mul(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    let mut c = Mat::zeros(a.nrows(), b.ncols());
+    matmul(c.as_mut(), Accum::Replace, a, b, 1.0, Par::Seq);
+    c
+}
+
+/// `C = Aᵀ B` (fresh matrix).
+pub(crate) fn mul_tn(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    mul(a.transpose(), b)
+}
+
+/// `A diag(d)`: scale the columns.
+pub(crate) fn scale_cols(a: MatRef<'_, f64>, d: &[f64]) -> Mat<f64> {
+    Mat::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)] * d[j])
+}
+
+/// Row-wise quadratic forms `x_iᵀ T x_i` for the rows of X (T symmetric).
+pub(crate) fn row_quad(x: MatRef<'_, f64>, t: MatRef<'_, f64>) -> Vec<f64> {
+    let xt = mul(x, t);
+    (0..x.nrows())
+        .map(|i| (0..x.ncols()).map(|k| xt[(i, k)] * x[(i, k)]).sum())
+        .collect()
+}
+
+/// `Xᵀ diag(w) X` (D×D).
+pub(crate) fn weighted_gram(x: MatRef<'_, f64>, w: &[f64]) -> Mat<f64> {
+    let (n, d) = (x.nrows(), x.ncols());
+    let mut out = Mat::zeros(d, d);
+    for k in 0..d {
+        for l in 0..=k {
+            let mut acc = 0.0;
+            for i in 0..n {
+                acc += w[i] * x[(i, k)] * x[(i, l)];
+            }
+            out[(k, l)] = acc;
+            out[(l, k)] = acc;
+        }
+    }
+    out
+}
+
+/// `Xᵀ w` (D).
+pub(crate) fn weighted_col_sum(x: MatRef<'_, f64>, w: &[f64]) -> Vec<f64> {
+    (0..x.ncols())
+        .map(|k| (0..x.nrows()).map(|i| w[i] * x[(i, k)]).sum())
+        .collect()
+}
+
+/// `A v` for a small matrix.
+pub(crate) fn mat_vec(a: MatRef<'_, f64>, v: &[f64]) -> Vec<f64> {
+    (0..a.nrows())
+        .map(|i| (0..a.ncols()).map(|j| a[(i, j)] * v[j]).sum())
+        .collect()
+}
+
+pub(crate) fn check_moment_input(m: &[f64], s: MatRef<'_, f64>, d: usize) -> Result<()> {
+    if m.len() != d || s.nrows() != d || s.ncols() != d {
+        return Err(GpError::Shape {
+            what: "moment-matching input".into(),
+            expected: format!("mean of length {d} and {d}×{d} covariance"),
+            got: format!(
+                "mean of length {} and {}×{} covariance",
+                m.len(),
+                s.nrows(),
+                s.ncols()
+            ),
+        });
+    }
+    if let Some(i) = m.iter().position(|v| !v.is_finite()) {
+        return Err(GpError::NonFinite {
+            what: "moment-matching input mean".into(),
+            row: i,
+            col: 0,
+            value: m[i],
+        });
+    }
+    crate::linalg::check_finite(s, "moment-matching input covariance")
+}
