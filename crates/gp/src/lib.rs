@@ -9,6 +9,7 @@
 //! environments or the CLI.
 
 mod error;
+pub mod fastexp;
 pub mod fd;
 pub mod kernel;
 pub mod linalg;

@@ -7,6 +7,9 @@ use crate::linalg::{check_finite, Chol, JitterPolicy};
 use faer::{Mat, MatRef};
 use rayon::prelude::*;
 
+/// Cholesky factor, β and inverse of one output's training covariance.
+type OutputFactors = (Chol, Vec<f64>, Mat<f64>);
+
 /// A fitted exact GP (E outputs).
 #[derive(Clone, Debug)]
 pub struct GpModel {
@@ -67,7 +70,7 @@ impl GpModel {
         validate_data(inputs.as_ref(), targets.as_ref(), &hyp)?;
         let kernel = SquaredExponential;
         let n = inputs.nrows();
-        let per_output: Vec<Result<(Chol, Vec<f64>, Mat<f64>)>> = hyp
+        let per_output: Vec<Result<OutputFactors>> = hyp
             .par_iter()
             .enumerate()
             .map(|(e, h)| {

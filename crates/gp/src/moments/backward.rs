@@ -15,8 +15,7 @@
 use super::forward::{MmCache, MmModel, PairBlock, Variance};
 use super::small::{mat_vec, mul, mul_tn, weighted_col_sum, weighted_gram};
 use crate::error::{GpError, Result};
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatRef, Par};
+use faer::{Mat, MatRef};
 use rayon::prelude::*;
 
 /// Adjoints of the moment-matching outputs.
@@ -134,20 +133,21 @@ pub fn backward(
             let mut phi = Mat::<f64>::zeros(n, n);
             let mut l_beta_b = vec![0.0; n];
             let mut lt_beta_a = vec![0.0; n];
+            let mut r = vec![0.0; n];
+            let mut c = vec![0.0; n];
             for j in 0..n {
-                let ex = blk
-                    .exponent
+                let lc = blk
+                    .l
                     .col(j)
                     .try_as_col_major()
                     .expect("column-major")
                     .as_slice();
-                let gb = g * beta_b[j];
+                let gb = pc.t * g * beta_b[j];
                 let pc_j = phi
                     .col_mut(j)
                     .try_as_col_major_mut()
                     .expect("column-major")
                     .as_slice_mut();
-                let mut acc_lt = 0.0;
                 match w_diag {
                     Some(w) => {
                         let wc = w
@@ -155,26 +155,29 @@ pub fn backward(
                             .try_as_col_major()
                             .expect("column-major")
                             .as_slice();
+                        let tg = pc.t * g;
                         for i in 0..n {
-                            let l = ex[i].exp();
-                            pc_j[i] = pc.t * l * (gb * beta_a[i] - g * wc[i]);
-                            l_beta_b[i] += l * beta_b[j];
-                            acc_lt += l * beta_a[i];
+                            pc_j[i] = lc[i] * (gb * beta_a[i] - tg * wc[i]);
                         }
                     }
                     None => {
                         for i in 0..n {
-                            let l = ex[i].exp();
-                            pc_j[i] = pc.t * l * gb * beta_a[i];
-                            l_beta_b[i] += l * beta_b[j];
-                            acc_lt += l * beta_a[i];
+                            pc_j[i] = lc[i] * gb * beta_a[i];
                         }
                     }
                 }
+                let mut col_sum = 0.0;
+                let mut acc_lt = 0.0;
+                let bj = beta_b[j];
+                for i in 0..n {
+                    r[i] += pc_j[i];
+                    col_sum += pc_j[i];
+                    l_beta_b[i] += lc[i] * bj;
+                    acc_lt += lc[i] * beta_a[i];
+                }
+                c[j] = col_sum;
                 lt_beta_a[j] = acc_lt;
             }
-            let r: Vec<f64> = (0..n).map(|i| (0..n).map(|j| phi[(i, j)]).sum()).collect();
-            let c: Vec<f64> = (0..n).map(|j| phi.col(j).iter().sum()).collect();
             let phi_sum: f64 = r.iter().sum();
             let phi_b = mul(phi.as_ref(), blk.scaled_b.as_ref());
             // T̄ = 𝒜ᵀdiag(r)𝒜 + ℬᵀdiag(c)ℬ + 2𝒜ᵀΦℬ

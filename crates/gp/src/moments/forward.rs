@@ -4,6 +4,7 @@ use super::small::{
     check_moment_input, mat_vec, mul, row_quad, scale_cols, spd_inverse_logdet, weighted_col_sum,
 };
 use crate::error::{GpError, Result};
+use crate::fastexp::exp_in_place;
 use crate::kernel::Hyper;
 use crate::model::GpModel;
 use faer::linalg::matmul::matmul;
@@ -106,7 +107,6 @@ pub(super) struct PairCache {
 /// What the backward pass needs from the forward pass (O(E²D² + E N D) numbers).
 #[derive(Clone, Debug)]
 pub struct MmCache {
-    pub(super) s: Mat<f64>,
     /// N×D, `x_i − m`.
     pub(super) nu: Mat<f64>,
     pub(super) outputs: Vec<OutputCache>,
@@ -196,7 +196,6 @@ pub fn forward(model: &MmModel<'_>, m: &[f64], s: MatRef<'_, f64>) -> Result<(Mo
         });
     }
     let cache = MmCache {
-        s: s.to_owned(),
         nu,
         outputs,
         pairs,
@@ -242,10 +241,8 @@ pub(super) fn pair_cache(
 pub(super) struct PairBlock {
     pub scaled_a: Mat<f64>,
     pub scaled_b: Mat<f64>,
-    pub row: Vec<f64>,
-    pub col: Vec<f64>,
-    /// Exponent `P_ij + r_i + c_j`, N×N (column-major).
-    pub exponent: Mat<f64>,
+    /// The block `L_ij = exp(P_ij + r_i + c_j)`, N×N (column-major).
+    pub l: Mat<f64>,
 }
 
 impl PairBlock {
@@ -267,30 +264,28 @@ impl PairBlock {
             2.0,
             Par::Seq,
         );
-        for j in 0..n {
-            let cj = col[j];
+        for (j, cj) in col.iter().enumerate() {
             let colj = exponent
                 .col_mut(j)
                 .try_as_col_major_mut()
                 .expect("fresh matrix is column-major")
                 .as_slice_mut();
-            for (i, x) in colj.iter_mut().enumerate() {
-                *x += row[i] + cj;
+            for (x, ri) in colj.iter_mut().zip(&row) {
+                *x += ri + cj;
             }
+            exp_in_place(colj);
         }
         Self {
             scaled_a,
             scaled_b,
-            row,
-            col,
-            exponent,
+            l: exponent,
         }
     }
 
     /// `Σ_ij β_ai L_ij β_bj`, and for a diagonal pair with model variance `Σ_ij W_ij L_ij` in
     /// the same sweep (0 otherwise).
     fn forward_sums(&self, model: &MmModel<'_>, a: usize, b: usize) -> (f64, f64) {
-        let n = self.exponent.nrows();
+        let n = self.l.nrows();
         let beta_a: Vec<f64> = (0..n).map(|i| model.beta[(i, a)]).collect();
         let w = match (a == b, model.variance) {
             (true, Variance::Model(w)) => Some(&w[a]),
@@ -298,18 +293,14 @@ impl PairBlock {
         };
         let mut total = 0.0;
         let mut trace = 0.0;
-        let mut buf = vec![0.0; n];
         for j in 0..n {
             let col = self
-                .exponent
+                .l
                 .col(j)
                 .try_as_col_major()
                 .expect("column-major")
                 .as_slice();
-            for (o, x) in buf.iter_mut().zip(col) {
-                *o = x.exp();
-            }
-            let s: f64 = buf.iter().zip(&beta_a).map(|(l, b)| l * b).sum();
+            let s: f64 = col.iter().zip(&beta_a).map(|(l, b)| l * b).sum();
             total += s * model.beta[(j, b)];
             if let Some(w) = w {
                 let wc = w
@@ -317,7 +308,7 @@ impl PairBlock {
                     .try_as_col_major()
                     .expect("column-major")
                     .as_slice();
-                trace += buf.iter().zip(wc).map(|(l, w)| l * w).sum::<f64>();
+                trace += col.iter().zip(wc).map(|(l, w)| l * w).sum::<f64>();
             }
         }
         (total, trace)

@@ -32,3 +32,6 @@ mod small;
 
 pub use backward::{backward, InputAdjoint, MomentsAdjoint, ParamAdjoint};
 pub use forward::{forward, MmCache, MmModel, Moments, Variance};
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,292 @@
+//! Finite-difference and property tests of moment matching (the oracle tests live in
+//! `crates/oracle/tests`).
+
+use super::*;
+use crate::fd::{directional, rel_diff};
+use crate::kernel::Hyper;
+use crate::model::GpModel;
+use faer::Mat;
+
+/// A tiny deterministic generator so the tests need no RNG crate in the library.
+struct Lcg(u64);
+impl Lcg {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn normal(&mut self) -> f64 {
+        let (u, v) = (self.uniform().max(1e-300), self.uniform());
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    }
+}
+
+fn random_gp(rng: &mut Lcg, n: usize, d: usize, e: usize) -> GpModel {
+    let x = Mat::from_fn(n, d, |_, _| rng.normal());
+    let y = Mat::from_fn(n, e, |i, j| {
+        (x[(i, j % d)] + 0.3 * j as f64).sin() + 0.1 * rng.normal()
+    });
+    let hyp = (0..e)
+        .map(|_| Hyper {
+            log_ls: (0..d).map(|_| 0.2 + 0.8 * rng.uniform()).collect(),
+            log_sf: -0.5 + rng.uniform(),
+            log_sn: -2.5 + rng.uniform(),
+        })
+        .collect();
+    GpModel::new(x, y, hyp).unwrap()
+}
+
+fn random_spd(rng: &mut Lcg, d: usize, scale: f64) -> Mat<f64> {
+    let a = Mat::from_fn(d, d, |_, _| rng.normal());
+    let mut s = Mat::from_fn(d, d, |i, j| {
+        scale * (0..d).map(|k| a[(i, k)] * a[(j, k)]).sum::<f64>() / d as f64
+    });
+    for i in 0..d {
+        s[(i, i)] += 0.05 * scale;
+    }
+    s
+}
+
+fn contract(adj: &(Vec<f64>, Mat<f64>, Mat<f64>), mo: &Moments) -> f64 {
+    let (mb, sb, vb) = adj;
+    let mut f: f64 = mb.iter().zip(&mo.mean).map(|(a, b)| a * b).sum();
+    for i in 0..sb.nrows() {
+        for j in 0..sb.ncols() {
+            f += sb[(i, j)] * mo.cov[(i, j)];
+        }
+    }
+    for i in 0..vb.nrows() {
+        for j in 0..vb.ncols() {
+            f += vb[(i, j)] * mo.v[(i, j)];
+        }
+    }
+    f
+}
+
+fn random_adjoint(rng: &mut Lcg, d: usize, e: usize) -> (Vec<f64>, Mat<f64>, Mat<f64>) {
+    (
+        (0..e).map(|_| rng.normal()).collect(),
+        Mat::from_fn(e, e, |_, _| rng.normal()),
+        Mat::from_fn(d, e, |_, _| rng.normal()),
+    )
+}
+
+/// Pack (m, upper triangle of s) and back, so a direction perturbs s symmetrically.
+fn pack(m: &[f64], s: &Mat<f64>) -> Vec<f64> {
+    let d = m.len();
+    let mut v = m.to_vec();
+    for i in 0..d {
+        for j in 0..=i {
+            v.push(s[(i, j)]);
+        }
+    }
+    v
+}
+fn unpack(v: &[f64], d: usize) -> (Vec<f64>, Mat<f64>) {
+    let m = v[..d].to_vec();
+    let mut s = Mat::zeros(d, d);
+    let mut k = d;
+    for i in 0..d {
+        for j in 0..=i {
+            s[(i, j)] = v[k];
+            s[(j, i)] = v[k];
+            k += 1;
+        }
+    }
+    (m, s)
+}
+
+fn check_input_vjp(variance_model: bool, n: usize, d: usize, e: usize, seed: u64) {
+    let mut rng = Lcg(seed);
+    let gp = random_gp(&mut rng, n, d, e);
+    let mm = if variance_model {
+        MmModel::with_uncertainty(&gp)
+    } else {
+        MmModel::mean_only(&gp)
+    };
+    let m: Vec<f64> = (0..d).map(|_| 0.5 * rng.normal()).collect();
+    let s = random_spd(&mut rng, d, 0.3);
+    let adj = random_adjoint(&mut rng, d, e);
+    let (_, cache) = forward(&mm, &m, s.as_ref()).unwrap();
+    let ia = backward(
+        &mm,
+        &cache,
+        MomentsAdjoint {
+            mean: &adj.0,
+            cov: adj.1.as_ref(),
+            v: adj.2.as_ref(),
+        },
+        false,
+    )
+    .unwrap();
+    let x0 = pack(&m, &s);
+    for trial in 0..3 {
+        let dir: Vec<f64> = x0.iter().map(|_| rng.normal()).collect();
+        let mut f = |x: &[f64]| {
+            let (m, s) = unpack(x, d);
+            contract(&adj, &forward(&mm, &m, s.as_ref()).unwrap().0)
+        };
+        let numeric = directional(&mut f, &x0, &dir, 1e-4);
+        let (dm, ds) = unpack(&dir, d);
+        let mut analytic: f64 = ia.m.iter().zip(&dm).map(|(a, b)| a * b).sum();
+        for i in 0..d {
+            for j in 0..d {
+                analytic += ia.s[(i, j)] * ds[(i, j)];
+            }
+        }
+        let err = rel_diff(analytic, numeric, 1e-8);
+        assert!(err < 1e-6, "N={n} D={d} E={e} model={variance_model} trial {trial}: analytic {analytic} numeric {numeric} rel {err}");
+    }
+}
+
+#[test]
+fn full_gp_input_vjp_matches_finite_differences() {
+    for (n, d, e, seed) in [(5, 1, 1, 1), (20, 2, 3, 2), (40, 4, 2, 3), (30, 7, 6, 4)] {
+        check_input_vjp(true, n, d, e, seed);
+    }
+}
+
+#[test]
+fn mean_gp_input_vjp_matches_finite_differences() {
+    for (n, d, e, seed) in [(5, 1, 1, 5), (20, 3, 2, 6), (30, 6, 4, 7)] {
+        check_input_vjp(false, n, d, e, seed);
+    }
+}
+
+#[test]
+fn mean_gp_parameter_vjp_matches_finite_differences() {
+    for (n, d, e, seed) in [(4, 1, 1, 8), (10, 3, 2, 9), (15, 5, 3, 10)] {
+        let mut rng = Lcg(seed);
+        let gp = random_gp(&mut rng, n, d, e);
+        let m: Vec<f64> = (0..d).map(|_| 0.5 * rng.normal()).collect();
+        let s = random_spd(&mut rng, d, 0.3);
+        let adj = random_adjoint(&mut rng, d, e);
+        let mm = MmModel::mean_only(&gp);
+        let (_, cache) = forward(&mm, &m, s.as_ref()).unwrap();
+        let ia = backward(
+            &mm,
+            &cache,
+            MomentsAdjoint {
+                mean: &adj.0,
+                cov: adj.1.as_ref(),
+                v: adj.2.as_ref(),
+            },
+            true,
+        )
+        .unwrap();
+        let full = gp.chain_param_adjoint(ia.params.as_ref().unwrap());
+        // Parameters flattened: inputs, targets, hyp columns.
+        let mut x0 = Vec::new();
+        let mut analytic_grad = Vec::new();
+        for i in 0..n {
+            for k in 0..d {
+                x0.push(gp.inputs()[(i, k)]);
+                analytic_grad.push(full.inputs[(i, k)]);
+            }
+        }
+        for i in 0..n {
+            for a in 0..e {
+                x0.push(gp.targets()[(i, a)]);
+                analytic_grad.push(full.targets[(i, a)]);
+            }
+        }
+        for a in 0..e {
+            x0.extend(gp.hyp()[a].to_pilco());
+            analytic_grad.extend(&full.hyp[a]);
+        }
+        let rebuild = |x: &[f64]| {
+            let inputs = Mat::from_fn(n, d, |i, k| x[i * d + k]);
+            let off = n * d;
+            let targets = Mat::from_fn(n, e, |i, a| x[off + i * e + a]);
+            let off = off + n * e;
+            let hyp = (0..e)
+                .map(|a| Hyper::from_pilco(&x[off + a * (d + 2)..off + (a + 1) * (d + 2)]))
+                .collect();
+            GpModel::new(inputs, targets, hyp).unwrap()
+        };
+        for trial in 0..3 {
+            let dir: Vec<f64> = x0.iter().map(|_| rng.normal()).collect();
+            let mut f = |x: &[f64]| {
+                let g = rebuild(x);
+                contract(
+                    &adj,
+                    &forward(&MmModel::mean_only(&g), &m, s.as_ref()).unwrap().0,
+                )
+            };
+            let numeric = directional(&mut f, &x0, &dir, 1e-4);
+            let analytic: f64 = analytic_grad.iter().zip(&dir).map(|(a, b)| a * b).sum();
+            let err = rel_diff(analytic, numeric, 1e-8);
+            assert!(
+                err < 1e-6,
+                "N={n} D={d} E={e} trial {trial}: analytic {analytic} numeric {numeric} rel {err}"
+            );
+        }
+    }
+}
+
+#[test]
+fn covariance_is_symmetric_positive_semidefinite() {
+    for (seed, model) in [(11, true), (12, false), (13, true)] {
+        let mut rng = Lcg(seed);
+        let gp = random_gp(&mut rng, 40, 3, 4);
+        let mm = if model {
+            MmModel::with_uncertainty(&gp)
+        } else {
+            MmModel::mean_only(&gp)
+        };
+        let s = random_spd(&mut rng, 3, 0.5);
+        let (mo, _) = forward(&mm, &[0.1, -0.2, 0.3], s.as_ref()).unwrap();
+        for i in 0..4 {
+            for j in 0..4 {
+                assert_eq!(mo.cov[(i, j)], mo.cov[(j, i)]);
+            }
+        }
+        let c = crate::linalg::Chol::new(mo.cov.as_ref(), "S");
+        assert!(
+            c.is_ok(),
+            "moment-matched covariance is not positive definite: {:?}",
+            mo.cov
+        );
+    }
+}
+
+#[test]
+fn vanishing_input_variance_recovers_the_plain_gp_prediction() {
+    let mut rng = Lcg(21);
+    let gp = random_gp(&mut rng, 30, 3, 2);
+    let x = [0.2, -0.4, 0.1];
+    let (mean, var) = gp.predict(&x);
+    let s = Mat::from_fn(3, 3, |i, j| if i == j { 1e-12 } else { 0.0 });
+    let (mo, _) = forward(&MmModel::with_uncertainty(&gp), &x, s.as_ref()).unwrap();
+    for a in 0..2 {
+        assert!(
+            (mo.mean[a] - mean[a]).abs() < 1e-9,
+            "mean {} vs {}",
+            mo.mean[a],
+            mean[a]
+        );
+        assert!(
+            (mo.cov[(a, a)] - var[a]).abs() < 1e-7,
+            "var {} vs {}",
+            mo.cov[(a, a)],
+            var[a]
+        );
+    }
+}
+
+#[test]
+fn bad_inputs_are_errors_not_panics() {
+    let mut rng = Lcg(31);
+    let gp = random_gp(&mut rng, 10, 2, 1);
+    let mm = MmModel::with_uncertainty(&gp);
+    let s = Mat::from_fn(2, 2, |i, j| if i == j { 0.1 } else { 0.0 });
+    assert!(forward(&mm, &[f64::NAN, 0.0], s.as_ref())
+        .unwrap_err()
+        .to_string()
+        .contains("mean"));
+    assert!(forward(&mm, &[0.0], s.as_ref()).is_err());
+    let bad = Mat::from_fn(2, 2, |i, j| if i == j { -5.0 } else { 0.0 });
+    assert!(forward(&mm, &[0.0, 0.0], bad.as_ref()).is_err());
+}
