@@ -38,8 +38,9 @@ const C: [f64; 14] = [
     1.0 / 6227020800.0,
 ];
 
+/// One exponential, written so that loops calling it vectorise.
 #[inline(always)]
-fn exp1(x: f64) -> f64 {
+pub(crate) fn exp1(x: f64) -> f64 {
     let xc = x.clamp(LO, HI);
     let t = xc.mul_add(LOG2E, SHIFT);
     let k = t - SHIFT;

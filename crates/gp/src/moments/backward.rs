@@ -13,6 +13,7 @@
 //!   `s̄ −= A Ā A + ½ (Σg) A`, `Ā = V̄ uᵀ − ½ Σ_i g_i ν_iν_iᵀ`.
 
 use super::forward::{MmCache, MmModel, PairBlock, Variance};
+use super::kernels::block_backward;
 use super::small::{mat_vec, mul, mul_tn, weighted_col_sum, weighted_gram};
 use crate::error::{GpError, Result};
 use faer::{Mat, MatRef};
@@ -130,56 +131,20 @@ pub fn backward(
             // Φ = t L ∘ (G β_a β_bᵀ − δ_ab S̄_aa W_a)
             let beta_a: Vec<f64> = (0..n).map(|i| model.beta[(i, a)]).collect();
             let beta_b: Vec<f64> = (0..n).map(|j| model.beta[(j, b)]).collect();
-            let mut phi = Mat::<f64>::zeros(n, n);
-            let mut l_beta_b = vec![0.0; n];
-            let mut lt_beta_a = vec![0.0; n];
-            let mut r = vec![0.0; n];
-            let mut c = vec![0.0; n];
-            for j in 0..n {
-                let lc = blk
-                    .l
-                    .col(j)
-                    .try_as_col_major()
-                    .expect("column-major")
-                    .as_slice();
-                let gb = pc.t * g * beta_b[j];
-                let pc_j = phi
-                    .col_mut(j)
-                    .try_as_col_major_mut()
-                    .expect("column-major")
-                    .as_slice_mut();
-                match w_diag {
-                    Some(w) => {
-                        let wc = w
-                            .col(j)
-                            .try_as_col_major()
-                            .expect("column-major")
-                            .as_slice();
-                        let tg = pc.t * g;
-                        for i in 0..n {
-                            pc_j[i] = lc[i] * (gb * beta_a[i] - tg * wc[i]);
-                        }
-                    }
-                    None => {
-                        for i in 0..n {
-                            pc_j[i] = lc[i] * gb * beta_a[i];
-                        }
-                    }
-                }
-                let mut col_sum = 0.0;
-                let mut acc_lt = 0.0;
-                let bj = beta_b[j];
-                for i in 0..n {
-                    r[i] += pc_j[i];
-                    col_sum += pc_j[i];
-                    l_beta_b[i] += lc[i] * bj;
-                    acc_lt += lc[i] * beta_a[i];
-                }
-                c[j] = col_sum;
-                lt_beta_a[j] = acc_lt;
-            }
+            let ops = blk.operands(&beta_a, &beta_b, w_diag);
+            let scale_w = if w_diag.is_some() { pc.t * g } else { 0.0 };
+            let kb = block_backward(
+                &ops,
+                pc.t * g,
+                scale_w,
+                with_params.then_some(blk.a_cols.as_slice()),
+            );
+            let r = kb.phi_row;
+            let c = kb.phi_col;
+            let phi_b = Mat::from_fn(n, d, |i, k| kb.phi_b[k * n + i]);
+            let l_beta_b = kb.l_beta_b;
+            let lt_beta_a = kb.lt_beta_a;
             let phi_sum: f64 = r.iter().sum();
-            let phi_b = mul(phi.as_ref(), blk.scaled_b.as_ref());
             // T̄ = 𝒜ᵀdiag(r)𝒜 + ℬᵀdiag(c)ℬ + 2𝒜ᵀΦℬ
             let mut t_bar = weighted_gram(blk.scaled_a.as_ref(), &r);
             let gb_ = weighted_gram(blk.scaled_b.as_ref(), &c);
@@ -220,7 +185,8 @@ pub fn backward(
                 .collect();
 
             let params = with_params.then(|| {
-                let phit_a = mul_tn(phi.as_ref(), blk.scaled_a.as_ref());
+                let phit = kb.phit_a.as_ref().expect("requested with the parameters");
+                let phit_a = Mat::from_fn(n, d, |j, k| phit[j * d + k]);
                 // Ā = 2(diag(r)𝒜 + Φℬ)T, ℬ̄ = 2(diag(c)ℬ + Φᵀ𝒜)T
                 let abar_pre = Mat::from_fn(n, d, |i, k| {
                     2.0 * (r[i] * blk.scaled_a[(i, k)] + phi_b[(i, k)])

@@ -1,14 +1,13 @@
 //! Forward pass of moment matching: mean, covariance and input-output covariance.
 
+use super::kernels::{block_forward, BlockOperands};
 use super::small::{
     check_moment_input, mat_vec, mul, row_quad, scale_cols, spd_inverse_logdet, weighted_col_sum,
 };
 use crate::error::{GpError, Result};
-use crate::fastexp::exp_in_place;
 use crate::kernel::Hyper;
 use crate::model::GpModel;
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatRef, Par};
+use faer::{Mat, MatRef};
 use rayon::prelude::*;
 
 /// What replaces the model-uncertainty term of the covariance.
@@ -235,82 +234,95 @@ pub(super) fn pair_cache(
     })
 }
 
-/// The N×N block of one output pair: `L_ij = exp(r_i + c_j + P_ij)` with
-/// `r_i = log k_a(x_i) + 𝒜_iᵀT𝒜_i`, `c_j = log k_b(x_j) + ℬ_jᵀTℬ_j`, `P = 2𝒜Tℬᵀ`,
-/// `𝒜 = ν Λ_a⁻¹`, `ℬ = ν Λ_b⁻¹`.
+/// The operands of the N×N block of one output pair:
+/// `L_ij = exp(r_i + c_j + P_ij)` with `r_i = log k_a(x_i) + 𝒜_iᵀT𝒜_i`,
+/// `c_j = log k_b(x_j) + ℬ_jᵀTℬ_j`, `P = 2𝒜Tℬᵀ`, `𝒜 = ν Λ_a⁻¹`, `ℬ = ν Λ_b⁻¹`. The block
+/// itself is formed column by column in [`super::kernels`] and never stored.
 pub(super) struct PairBlock {
     pub scaled_a: Mat<f64>,
     pub scaled_b: Mat<f64>,
-    /// The block `L_ij = exp(P_ij + r_i + c_j)`, N×N (column-major).
-    pub l: Mat<f64>,
+    /// `2𝒜T`, column-major.
+    a_hat: Vec<f64>,
+    /// `ℬ`, row-major.
+    b_rows: Vec<f64>,
+    /// `𝒜`, column-major (for the parameter adjoints).
+    pub a_cols: Vec<f64>,
+    row: Vec<f64>,
+    col: Vec<f64>,
 }
 
 impl PairBlock {
     pub fn new(nu: &Mat<f64>, outputs: &[OutputCache], pc: &PairCache) -> Self {
-        let n = nu.nrows();
+        let (n, d) = (nu.nrows(), nu.ncols());
         let scaled_a = scale_cols(nu.as_ref(), &outputs[pc.a].inv_ls2);
         let scaled_b = scale_cols(nu.as_ref(), &outputs[pc.b].inv_ls2);
         let qa = row_quad(scaled_a.as_ref(), pc.t_mat.as_ref());
         let qb = row_quad(scaled_b.as_ref(), pc.t_mat.as_ref());
-        let row: Vec<f64> = (0..n).map(|i| outputs[pc.a].log_k[i] + qa[i]).collect();
-        let col: Vec<f64> = (0..n).map(|j| outputs[pc.b].log_k[j] + qb[j]).collect();
-        let at2 = mul(scaled_a.as_ref(), pc.t_mat.as_ref());
-        let mut exponent = Mat::zeros(n, n);
-        matmul(
-            exponent.as_mut(),
-            Accum::Replace,
-            at2.as_ref(),
-            scaled_b.as_ref().transpose(),
-            2.0,
-            Par::Seq,
-        );
-        for (j, cj) in col.iter().enumerate() {
-            let colj = exponent
-                .col_mut(j)
-                .try_as_col_major_mut()
-                .expect("fresh matrix is column-major")
-                .as_slice_mut();
-            for (x, ri) in colj.iter_mut().zip(&row) {
-                *x += ri + cj;
-            }
-            exp_in_place(colj);
-        }
+        let row = (0..n).map(|i| outputs[pc.a].log_k[i] + qa[i]).collect();
+        let col = (0..n).map(|j| outputs[pc.b].log_k[j] + qb[j]).collect();
+        let at = mul(scaled_a.as_ref(), pc.t_mat.as_ref());
+        let a_hat = (0..d)
+            .flat_map(|k| (0..n).map(move |i| (i, k)))
+            .map(|(i, k)| 2.0 * at[(i, k)])
+            .collect();
+        let b_rows = (0..n)
+            .flat_map(|j| (0..d).map(move |k| (j, k)))
+            .map(|(j, k)| scaled_b[(j, k)])
+            .collect();
+        let a_cols = (0..d)
+            .flat_map(|k| (0..n).map(move |i| (i, k)))
+            .map(|(i, k)| scaled_a[(i, k)])
+            .collect();
         Self {
             scaled_a,
             scaled_b,
-            l: exponent,
+            a_hat,
+            b_rows,
+            a_cols,
+            row,
+            col,
+        }
+    }
+
+    pub fn operands<'a>(
+        &'a self,
+        beta_a: &'a [f64],
+        beta_b: &'a [f64],
+        w: Option<&'a Mat<f64>>,
+    ) -> BlockOperands<'a> {
+        let w = w.map(|w| {
+            let stride = w.col_stride() as usize;
+            let len = stride * (w.ncols() - 1) + w.nrows();
+            // SAFETY: a Mat's columns are contiguous with this stride; the slice covers
+            // exactly its storage from the first to the last element.
+            (
+                unsafe { std::slice::from_raw_parts(w.as_ptr(), len) },
+                stride,
+            )
+        });
+        BlockOperands {
+            n: self.row.len(),
+            d: self.scaled_a.ncols(),
+            a_hat: &self.a_hat,
+            b: &self.b_rows,
+            row: &self.row,
+            col: &self.col,
+            beta_a,
+            beta_b,
+            w,
         }
     }
 
     /// `Σ_ij β_ai L_ij β_bj`, and for a diagonal pair with model variance `Σ_ij W_ij L_ij` in
     /// the same sweep (0 otherwise).
     fn forward_sums(&self, model: &MmModel<'_>, a: usize, b: usize) -> (f64, f64) {
-        let n = self.l.nrows();
+        let n = self.row.len();
         let beta_a: Vec<f64> = (0..n).map(|i| model.beta[(i, a)]).collect();
+        let beta_b: Vec<f64> = (0..n).map(|i| model.beta[(i, b)]).collect();
         let w = match (a == b, model.variance) {
             (true, Variance::Model(w)) => Some(&w[a]),
             _ => None,
         };
-        let mut total = 0.0;
-        let mut trace = 0.0;
-        for j in 0..n {
-            let col = self
-                .l
-                .col(j)
-                .try_as_col_major()
-                .expect("column-major")
-                .as_slice();
-            let s: f64 = col.iter().zip(&beta_a).map(|(l, b)| l * b).sum();
-            total += s * model.beta[(j, b)];
-            if let Some(w) = w {
-                let wc = w
-                    .col(j)
-                    .try_as_col_major()
-                    .expect("column-major")
-                    .as_slice();
-                trace += col.iter().zip(wc).map(|(l, w)| l * w).sum::<f64>();
-            }
-        }
-        (total, trace)
+        block_forward(&self.operands(&beta_a, &beta_b, w))
     }
 }

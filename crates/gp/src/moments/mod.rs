@@ -28,6 +28,7 @@
 
 mod backward;
 mod forward;
+mod kernels;
 mod small;
 
 pub use backward::{backward, InputAdjoint, MomentsAdjoint, ParamAdjoint};
