@@ -1,0 +1,113 @@
+//! # vicpilco-pilco: PILCO's small moment-matching blocks, built for reverse mode
+//!
+//! PILCO predicts a whole trial as a chain of Gaussians. Every link of that chain is a
+//! *block* that maps a Gaussian input `x ~ N(m, s)` to the exact (or moment-matched) mean,
+//! covariance and input-output term of its output. This crate holds the small blocks:
+//!
+//! | block | PILCO function | thesis | type |
+//! |---|---|---|---|
+//! | sine saturation `e·(9 sin x + sin 3x)/8` | `gSat` | eq. 4-22 | [`squash::SineSat`] |
+//! | partial non-negative saturation (gains on `[a_min, a_max]`) | — | eq. 4-23 (corrected) | [`squash::PartialSat`] |
+//! | trigonometric augmentation `(sin θ, cos θ)` | `gTrig` | — | [`squash::TrigAug`] |
+//! | saturating cost(s) `1 − exp(−½(x−z)ᵀW(x−z))`, sums of them | `lossSat` | eq. 4-8 | [`cost::SaturatingCost`], [`cost::CostSum`] |
+//! | normalised quadratic energy cost `aᵀS⁻¹a` | — | eqs. 4-9, 4-10 | [`cost::EnergyCost`] |
+//! | linear policy `u = w x + b` | `conlin` | eq. 3-21 | [`policy::LinearPolicy`] |
+//!
+//! ## Conventions (all blocks)
+//!
+//! * Input `x ~ N(m, s)`: `m` a slice of length D, `s` a symmetric D×D [`faer::Mat`].
+//! * Output [`Moments`]: mean `M`, covariance `S` and `C = s⁻¹ Cov[x, y]` (PILCO's `C`,
+//!   called `V` for policies), D×E. Scalar-valued costs return [`CostMoments`].
+//! * **Forward** returns the outputs and an opaque cache; **backward** is the vector-Jacobian
+//!   product: it takes the adjoints of the outputs (`M̄, S̄, C̄` in [`MomentsBar`]; `C̄`
+//!   optional) and returns the adjoints of the input distribution ([`GaussianBar`]).
+//! * **Adjoint of a covariance input.** `s̄` is the plain gradient `∂f/∂s_kl` with the
+//!   entries of `s` treated as independent, then symmetrised, `(G + Gᵀ)/2`. With this,
+//!   `df = Σ_kl s̄_kl ds_kl` for every *symmetric* perturbation `ds`, which is all a covariance
+//!   can undergo, and it is the form the oracle stores. Output adjoints `S̄` need not be
+//!   symmetric: `S̄_ij` is the adjoint of the entry `S_ij` as computed.
+//! * Policies additionally accumulate parameter adjoints into a caller-owned buffer in PILCO's
+//!   flat `unwrap` order (see [`policy::Policy`]), so one backward sweep over a trajectory
+//!   builds `dJ/dψ` without per-step allocations of parameter length.
+//!
+//! Shapes are validated by constructors (returning [`PilcoError`]); passing a forward input of
+//! the wrong dimension is a programming error and panics with a message.
+//!
+//! Every derivative here is checked against central finite differences
+//! (`vicpilco_gp::fd`) and, for `gSat`, `gTrig`, `lossSat` and `conlin`, against the original
+//! PILCO MATLAB code (`vicpilco-oracle`).
+
+pub mod cost;
+mod error;
+pub mod policy;
+pub mod squash;
+mod util;
+
+pub use error::{PilcoError, Result};
+
+use faer::Mat;
+
+/// Mean, covariance and input-output term of a block's output `y` for `x ~ N(m, s)`.
+#[derive(Clone, Debug)]
+pub struct Moments {
+    /// `E[y]`, length E.
+    pub mean: Vec<f64>,
+    /// `Cov[y]`, E×E, symmetric.
+    pub cov: Mat<f64>,
+    /// `s⁻¹ Cov[x, y]`, D×E (PILCO's `C`, or `V` for policies).
+    pub c: Mat<f64>,
+}
+
+/// Adjoints of a block's outputs (`M̄`, `S̄`, `C̄`); `C̄ = None` means zero.
+#[derive(Clone, Debug)]
+pub struct MomentsBar {
+    pub mean: Vec<f64>,
+    pub cov: Mat<f64>,
+    pub c: Option<Mat<f64>>,
+}
+
+impl MomentsBar {
+    /// All-zero adjoints for a block with D inputs and E outputs (`C̄ = None`).
+    pub fn zeros(e: usize) -> Self {
+        Self {
+            mean: vec![0.0; e],
+            cov: Mat::zeros(e, e),
+            c: None,
+        }
+    }
+}
+
+/// Adjoints of an input Gaussian: `m̄` and the symmetrised `s̄` (see the crate docs).
+#[derive(Clone, Debug)]
+pub struct GaussianBar {
+    pub mean: Vec<f64>,
+    pub cov: Mat<f64>,
+}
+
+impl GaussianBar {
+    pub fn zeros(d: usize) -> Self {
+        Self {
+            mean: vec![0.0; d],
+            cov: Mat::zeros(d, d),
+        }
+    }
+}
+
+/// Mean, variance and input-output term of a scalar cost `c(x)` for `x ~ N(m, s)`.
+#[derive(Clone, Debug)]
+pub struct CostMoments {
+    /// `E[c]`.
+    pub mean: f64,
+    /// `Var[c]` (for saturating costs clamped to 0 below 1e-12, as PILCO's `lossSat`).
+    pub var: f64,
+    /// `s⁻¹ Cov[x, c]`, length D (equals `∂E[c]/∂m`).
+    pub c: Vec<f64>,
+}
+
+/// Adjoints of a scalar cost's outputs; `c = None` means zero.
+#[derive(Clone, Debug, Default)]
+pub struct CostBar {
+    pub mean: f64,
+    pub var: f64,
+    pub c: Option<Vec<f64>>,
+}

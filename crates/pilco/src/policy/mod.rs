@@ -1,0 +1,55 @@
+//! Policies: maps from a Gaussian input `x ~ N(m, s)` to a Gaussian action with mean,
+//! covariance and `V = s⁻¹ Cov[x, u]`, plus a reverse-mode backward for the input **and** the
+//! parameters.
+//!
+//! The learning loop chains hundreds of policy calls per predicted trajectory and needs
+//! `dJ/dψ` from one backward sweep, so the backward *accumulates* the parameter adjoints into
+//! a caller-owned buffer (one per trajectory) instead of returning a fresh vector per step.
+//!
+//! The policy sees its own input vector: choosing which state dimensions (and optionally time)
+//! enter it, and any squashing of the output ([`crate::squash`]), happen outside the policy.
+
+mod linear;
+
+pub use linear::{LinearCache, LinearPolicy};
+
+use crate::{GaussianBar, Moments, MomentsBar, Result};
+use faer::MatRef;
+
+/// A policy on Gaussian inputs, with reverse-mode derivatives.
+///
+/// Implemented by [`LinearPolicy`] (PILCO's `conlin`); the RBF policy (PILCO's `congp`, a
+/// deterministic GP using the GP crate's `gp2` moment matching) implements it too.
+pub trait Policy {
+    /// What [`Policy::backward`] needs from [`Policy::forward`].
+    type Cache: Send + Sync;
+
+    /// D, the length of the policy input.
+    fn n_inputs(&self) -> usize;
+
+    /// E, the number of (unsquashed) actions.
+    fn n_outputs(&self) -> usize;
+
+    /// P, the number of learnable parameters.
+    fn n_params(&self) -> usize;
+
+    /// The parameters as a flat vector in PILCO's `unwrap` order: the fields of the
+    /// parameter struct in alphabetical order, each array vectorised column-major (for the
+    /// linear policy `[b; w(:)]`).
+    fn params(&self) -> Vec<f64>;
+
+    /// Set the parameters from a flat vector in the order of [`Policy::params`].
+    fn set_params(&mut self, p: &[f64]) -> Result<()>;
+
+    /// Mean `M` (E), covariance `S` (E×E) and `V = s⁻¹Cov[x, u]` (D×E) of the action for
+    /// `x ~ N(m, s)`, and the cache for the backward.
+    fn forward(&self, m: &[f64], s: MatRef<'_, f64>) -> Result<(Moments, Self::Cache)>;
+
+    /// Vector-Jacobian product. Given the adjoints of `(M, S, V)` (`bar.c` is `V̄`), **add**
+    /// `∂f/∂p` to `p_bar` (length P, same order as [`Policy::params`]) and return the adjoints
+    /// of `(m, s)` (`s̄` symmetrised, see the crate docs).
+    fn backward(&self, cache: &Self::Cache, bar: &MomentsBar, p_bar: &mut [f64]) -> GaussianBar;
+
+    /// The deterministic (unsquashed) action for a known input `x`.
+    fn action(&self, x: &[f64]) -> Vec<f64>;
+}

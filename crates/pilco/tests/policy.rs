@@ -1,0 +1,83 @@
+//! The linear policy: VJP for the input and the parameters against finite differences, the
+//! flat parameter order, and accumulation into the parameter adjoint buffer.
+
+mod common;
+
+use common::*;
+use faer::Mat;
+use vicpilco_gp::fd;
+use vicpilco_pilco::policy::{LinearPolicy, Policy};
+
+#[test]
+fn linear_policy_input_vjp_matches_finite_differences() {
+    let mut r = rng(31);
+    for (d, e) in [(1, 1), (2, 1), (3, 2), (5, 3), (7, 2)] {
+        let pol = LinearPolicy::new(
+            rand_mat(&mut r, e, d, 1.0).as_ref(),
+            &rand_vec(&mut r, e, 1.0),
+        )
+        .unwrap();
+        let m = rand_vec(&mut r, d, 1.0);
+        let s = rand_spd(&mut r, d, 0.5);
+        let f = |m: &[f64], s: &Mat<f64>| flat_moments(&pol.forward(m, s.as_ref()).unwrap().0);
+        let vjp = |m: &[f64], s: &Mat<f64>, yb: &[f64]| {
+            let (_, cache) = pol.forward(m, s.as_ref()).unwrap();
+            let mut pb = vec![0.0; pol.n_params()];
+            pol.backward(&cache, &moments_bar(yb, e, d), &mut pb)
+        };
+        check_vjp(&mut r, &m, &s, &f, &vjp);
+    }
+}
+
+#[test]
+fn linear_policy_parameter_vjp_matches_finite_differences() {
+    let mut r = rng(32);
+    for (d, e) in [(1, 1), (3, 2), (5, 3)] {
+        let mut pol = LinearPolicy::zeros(d, e);
+        let p0 = rand_vec(&mut r, pol.n_params(), 1.0);
+        pol.set_params(&p0).unwrap();
+        let m = rand_vec(&mut r, d, 1.0);
+        let s = rand_spd(&mut r, d, 0.5);
+        let ny = e + e * e + d * e;
+        let ybar = rand_vec(&mut r, ny, 1.0);
+        let (_, cache) = pol.forward(&m, s.as_ref()).unwrap();
+        // Accumulates: start from a non-zero buffer.
+        let mut pb = vec![1.0; pol.n_params()];
+        pol.backward(&cache, &moments_bar(&ybar, e, d), &mut pb);
+        pb.iter_mut().for_each(|v| *v -= 1.0);
+        for _ in 0..3 {
+            let dir = rand_vec(&mut r, p0.len(), 1.0);
+            let mut g = |p: &[f64]| {
+                let mut q = pol.clone();
+                q.set_params(p).unwrap();
+                dot(&ybar, &flat_moments(&q.forward(&m, s.as_ref()).unwrap().0))
+            };
+            let numeric = fd::directional(&mut g, &p0, &dir, 1e-4);
+            let analytic = dot(&pb, &dir);
+            let err = fd::rel_diff(analytic, numeric, 1e-6);
+            assert!(err < 1e-8, "{analytic} vs {numeric}");
+        }
+    }
+}
+
+#[test]
+fn linear_policy_moments_and_flat_order() {
+    // w = [[1, 2, 3], [4, 5, 6]], b = [7, 8]: p = [b; w(:)] = [7, 8, 1, 4, 2, 5, 3, 6].
+    let w = Mat::from_fn(2, 3, |i, j| (3 * i + j + 1) as f64);
+    let pol = LinearPolicy::new(w.as_ref(), &[7.0, 8.0]).unwrap();
+    assert_eq!(pol.params(), vec![7.0, 8.0, 1.0, 4.0, 2.0, 5.0, 3.0, 6.0]);
+    let mut q = LinearPolicy::zeros(3, 2);
+    q.set_params(&pol.params()).unwrap();
+    assert_eq!(flat(q.w()), flat(&w));
+    assert_eq!(q.b(), &[7.0, 8.0]);
+    assert!(q.set_params(&[1.0]).is_err());
+
+    let m = [1.0, -1.0, 0.5];
+    let s = Mat::from_fn(3, 3, |i, j| if i == j { 2.0 } else { 0.5 });
+    let (o, _) = pol.forward(&m, s.as_ref()).unwrap();
+    assert_eq!(o.mean, pol.action(&m));
+    assert_eq!(o.mean, vec![7.0 + 1.0 - 2.0 + 1.5, 8.0 + 4.0 - 5.0 + 3.0]);
+    let want = &w * &s * w.transpose();
+    assert_eq!(flat(&o.cov), flat(&want));
+    assert_eq!(flat(&o.c), flat(&w.transpose().to_owned()));
+}
