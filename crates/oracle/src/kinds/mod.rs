@@ -1,11 +1,13 @@
 //! One checker per oracle kind.
 
 mod blocks;
+mod congp;
 mod conlin;
 mod gp;
 mod gsat;
 mod gtrig;
 mod loss_sat;
+mod value;
 
 use crate::KindChecker;
 
@@ -18,5 +20,7 @@ pub fn checkers() -> Vec<&'static dyn KindChecker> {
         &gsat::GSat,
         &gtrig::GTrig,
         &loss_sat::LossSat,
+        &congp::Congp,
+        &value::Value,
     ]
 }

@@ -10,8 +10,10 @@
 //! enter it, and any squashing of the output ([`crate::squash`]), happen outside the policy.
 
 mod linear;
+mod rbf;
 
 pub use linear::{LinearCache, LinearPolicy};
+pub use rbf::{RbfPolicy, DEFAULT_SNR};
 
 use crate::{GaussianBar, Moments, MomentsBar, Result};
 use faer::MatRef;

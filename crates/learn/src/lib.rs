@@ -1,0 +1,25 @@
+//! # vicpilco-learn: long-term prediction, the expected return and its policy gradient
+//!
+//! * [`joint`]: the joint Gaussian of a step, grown block by block, and its adjoint;
+//! * [`step`]: one prediction step (state → policy → squashing → GP → next state), forward and
+//!   backward;
+//! * [`value`]: the expected return over a horizon and `dJ/dψ` by one reverse sweep.
+
+pub mod joint;
+pub mod step;
+pub mod value;
+
+use thiserror::Error;
+
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum LearnError {
+    #[error("prediction set-up: {0}")]
+    Spec(String),
+    #[error("non-finite prediction: {0}")]
+    NonFinite(String),
+    #[error(transparent)]
+    Gp(#[from] vicpilco_gp::GpError),
+    #[error(transparent)]
+    Pilco(#[from] vicpilco_pilco::PilcoError),
+}

@@ -1,0 +1,408 @@
+//! One step of long-term prediction, `x_t ~ N(m, s)` → `x_{t+1}`, forward and backward.
+//!
+//! The step builds one joint Gaussian (see [`crate::joint`]) over, in this order:
+//!
+//! 1. the state `x` (D0);
+//! 2. `(sin θ, cos θ)` of the angle dimensions (PILCO's `gTrig`), interleaved;
+//! 3. time `t·Δt`, if time is an input (a known value: zero variance);
+//! 4. the raw policy output `v` from the policy inputs (indices into 1–3);
+//! 5. the squashed action `u` (sine saturation, partly non-negative), or `u = v` without
+//!    squashing;
+//! 6. the GP output `y` from the dynamics inputs (indices into 1–3) followed by `u`.
+//!
+//! The next state is `x'_k = y_k + x_k + r_k(t)` for relative targets and `x'_k = y_k + r_k(t)`
+//! for absolute targets, where `r(t)` is an optional known prior mean (the reference
+//! trajectory's increment, thesis §4-1-2) that the GP was trained to predict the residual of.
+//! Its covariance `P Σ Pᵀ` includes the cross-covariance of `x` and `y` (thesis eq. 4-6).
+
+use crate::joint::{Joint, JointBar};
+use crate::LearnError;
+use faer::Mat;
+use vicpilco_gp::moments::{self, MmCache, MmModel, MomentsAdjoint};
+use vicpilco_pilco::policy::Policy;
+use vicpilco_pilco::squash::{PartialSat, TrigAug};
+use vicpilco_pilco::{GaussianBar, Moments};
+
+/// How a GP output becomes the next state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Target {
+    /// The GP predicts `x_{t+1} − x_t`.
+    Relative,
+    /// The GP predicts `x_{t+1}`.
+    Absolute,
+}
+
+/// The shape of a prediction step: which variables feed the policy and the dynamics GP.
+#[derive(Clone, Debug)]
+pub struct StepSpec {
+    /// D0.
+    pub state_dim: usize,
+    /// State dimensions that are angles (augmented with sin and cos).
+    pub angles: Vec<usize>,
+    /// Feed time `t·Δt` as a known variable (index `D0 + 2·|angles|`).
+    pub time_input: bool,
+    /// Policy inputs: indices into `[x; trig; time]`.
+    pub policy_inputs: Vec<usize>,
+    /// Dynamics-GP inputs before the action: indices into `[x; trig; time]`.
+    pub dyn_inputs: Vec<usize>,
+    /// One per state dimension.
+    pub targets: Vec<Target>,
+    /// Seconds per step (for the time input).
+    pub dt: f64,
+}
+
+impl StepSpec {
+    /// Length of `[x; trig; time]`.
+    pub fn augmented_dim(&self) -> usize {
+        self.state_dim + 2 * self.angles.len() + self.time_input as usize
+    }
+
+    pub fn validate(
+        &self,
+        policy_inputs: usize,
+        actions: usize,
+        gp_inputs: usize,
+        gp_outputs: usize,
+    ) -> Result<(), LearnError> {
+        let aug = self.augmented_dim();
+        let bad = |what: &str, detail: String| Err(LearnError::Spec(format!("{what}: {detail}")));
+        if let Some(&i) = self.angles.iter().find(|&&i| i >= self.state_dim) {
+            return bad(
+                "angles",
+                format!("index {i} ≥ state dimension {}", self.state_dim),
+            );
+        }
+        for (name, idx) in [
+            ("policy_inputs", &self.policy_inputs),
+            ("dyn_inputs", &self.dyn_inputs),
+        ] {
+            if let Some(&i) = idx.iter().find(|&&i| i >= aug) {
+                return bad(name, format!("index {i} ≥ augmented dimension {aug}"));
+            }
+        }
+        if self.policy_inputs.len() != policy_inputs {
+            return bad(
+                "policy_inputs",
+                format!(
+                    "{} indices for a policy with {policy_inputs} inputs",
+                    self.policy_inputs.len()
+                ),
+            );
+        }
+        if self.dyn_inputs.len() + actions != gp_inputs {
+            return bad(
+                "dyn_inputs",
+                format!(
+                    "{} indices + {actions} actions for a GP with {gp_inputs} inputs",
+                    self.dyn_inputs.len()
+                ),
+            );
+        }
+        if self.targets.len() != self.state_dim || gp_outputs != self.state_dim {
+            return bad(
+                "targets",
+                format!(
+                    "{} targets and {gp_outputs} GP outputs for {} states",
+                    self.targets.len(),
+                    self.state_dim
+                ),
+            );
+        }
+        if self.time_input && !(self.dt.is_finite() && self.dt > 0.0) {
+            return bad("dt", format!("{} must be > 0 with a time input", self.dt));
+        }
+        Ok(())
+    }
+}
+
+/// Everything a step needs: its shape, the policy (with optional squashing), the dynamics GP
+/// and the optional prior mean.
+pub struct Predictor<'a, P: Policy> {
+    pub spec: &'a StepSpec,
+    pub trig: Option<TrigAug>,
+    pub policy: &'a P,
+    /// Squashing of the raw policy output (input dimension = number of actions).
+    pub squash: Option<&'a PartialSat>,
+    pub dynamics: MmModel<'a>,
+    /// `r(t)` per step (H rows of D0), added to the predicted mean.
+    pub prior_shift: Option<&'a [Vec<f64>]>,
+}
+
+impl<'a, P: Policy> Predictor<'a, P> {
+    pub fn new(
+        spec: &'a StepSpec,
+        policy: &'a P,
+        squash: Option<&'a PartialSat>,
+        dynamics: MmModel<'a>,
+        prior_shift: Option<&'a [Vec<f64>]>,
+    ) -> Result<Self, LearnError> {
+        let actions = policy.n_outputs();
+        if let Some(sq) = squash {
+            if sq.n_inputs() != actions || sq.n_outputs() != actions {
+                return Err(LearnError::Spec(format!(
+                    "squashing maps {} inputs to {} outputs, the policy has {actions} actions",
+                    sq.n_inputs(),
+                    sq.n_outputs()
+                )));
+            }
+        }
+        spec.validate(
+            policy.n_inputs(),
+            actions,
+            dynamics.input_dim(),
+            dynamics.output_dim(),
+        )?;
+        if let Some(shift) = prior_shift {
+            if let Some((t, row)) = shift
+                .iter()
+                .enumerate()
+                .find(|(_, r)| r.len() != spec.state_dim || r.iter().any(|v| !v.is_finite()))
+            {
+                return Err(LearnError::Spec(format!(
+                    "prior mean row {t}: {row:?} is not {} finite numbers",
+                    spec.state_dim
+                )));
+            }
+        }
+        let trig = if spec.angles.is_empty() {
+            None
+        } else {
+            Some(TrigAug::new(
+                spec.state_dim,
+                &spec.angles,
+                &vec![1.0; spec.angles.len()],
+            )?)
+        };
+        Ok(Self {
+            spec,
+            trig,
+            policy,
+            squash,
+            dynamics,
+            prior_shift,
+        })
+    }
+
+    pub fn n_actions(&self) -> usize {
+        self.policy.n_outputs()
+    }
+
+    fn shift(&self, t: usize) -> Option<&[f64]> {
+        self.prior_shift.map(|s| {
+            s.get(t)
+                .map(Vec::as_slice)
+                .unwrap_or_else(|| s.last().map(Vec::as_slice).unwrap_or(&[]))
+        })
+    }
+}
+
+/// What the backward pass of a step needs.
+pub struct StepTape<C> {
+    joint: Joint,
+    trig: Option<(Mat<f64>, vicpilco_pilco::squash::SinesCache)>,
+    policy_idx: Vec<usize>,
+    policy: (Mat<f64>, C),
+    v_idx: Vec<usize>,
+    squash: Option<(Mat<f64>, vicpilco_pilco::squash::SinesCache)>,
+    u_idx: Vec<usize>,
+    gp_idx: Vec<usize>,
+    gp: (Mat<f64>, MmCache),
+    y_idx: Vec<usize>,
+}
+
+impl<C> StepTape<C> {
+    /// Indices of the actions in the step's joint.
+    pub fn action_idx(&self) -> &[usize] {
+        &self.u_idx
+    }
+}
+
+/// The predicted action and next state of one step.
+pub struct StepOut<C> {
+    pub next_mean: Vec<f64>,
+    pub next_cov: Mat<f64>,
+    /// Mean and covariance of the (squashed) action.
+    pub action_mean: Vec<f64>,
+    pub action_cov: Mat<f64>,
+    pub tape: StepTape<C>,
+}
+
+fn store_c(mo: &Moments) -> Mat<f64> {
+    mo.c.clone()
+}
+
+impl<P: Policy> Predictor<'_, P> {
+    /// Predict `x_{t+1}` from `x_t ~ N(m, s)` at step index `t` (time `t·Δt`).
+    pub fn step(&self, t: usize, m: &[f64], s: &Mat<f64>) -> Result<StepOut<P::Cache>, LearnError> {
+        let d0 = self.spec.state_dim;
+        let mut joint = Joint::new(m.to_vec(), s.clone());
+        let trig = match &self.trig {
+            Some(tr) => {
+                let (mo, cache) = tr.forward(m, s.as_ref());
+                let all: Vec<usize> = (0..d0).collect();
+                joint.append(&all, &mo);
+                Some((store_c(&mo), cache))
+            }
+            None => None,
+        };
+        if self.spec.time_input {
+            joint.append_constant(&[t as f64 * self.spec.dt]);
+        }
+        let (pm, ps) = joint.marginal(&self.spec.policy_inputs);
+        let (pmo, pcache) = self.policy.forward(&pm, ps.as_ref())?;
+        let v_idx = joint.append(&self.spec.policy_inputs, &pmo);
+        let (squash, u_idx) = match self.squash {
+            Some(sq) => {
+                let (vm, vs) = joint.marginal(&v_idx);
+                let (mo, cache) = sq.forward(&vm, vs.as_ref());
+                let u = joint.append(&v_idx, &mo);
+                (Some((store_c(&mo), cache)), u)
+            }
+            None => (None, v_idx.clone()),
+        };
+        let gp_idx: Vec<usize> = self.spec.dyn_inputs.iter().chain(&u_idx).copied().collect();
+        let (gm, gs) = joint.marginal(&gp_idx);
+        let (gmo, gcache) = moments::forward(&self.dynamics, &gm, gs.as_ref())?;
+        let gp_out = Moments {
+            mean: gmo.mean,
+            cov: gmo.cov,
+            c: gmo.v,
+        };
+        let y_idx = joint.append(&gp_idx, &gp_out);
+
+        let rel = |k: usize| self.spec.targets[k] == Target::Relative;
+        let shift = self.shift(t);
+        let next_mean: Vec<f64> = (0..d0)
+            .map(|k| {
+                joint.mean[y_idx[k]]
+                    + if rel(k) { joint.mean[k] } else { 0.0 }
+                    + shift.map_or(0.0, |s| s[k])
+            })
+            .collect();
+        let next_cov = Mat::from_fn(d0, d0, |k, l| {
+            let c = &joint.cov;
+            let mut v = c[(y_idx[k], y_idx[l])];
+            if rel(l) {
+                v += 0.5 * (c[(y_idx[k], l)] + c[(l, y_idx[k])]);
+            }
+            if rel(k) {
+                v += 0.5 * (c[(k, y_idx[l])] + c[(y_idx[l], k)]);
+            }
+            if rel(k) && rel(l) {
+                v += c[(k, l)];
+            }
+            v
+        });
+        let next_cov = Mat::from_fn(d0, d0, |k, l| 0.5 * (next_cov[(k, l)] + next_cov[(l, k)]));
+        let (action_mean, action_cov) = joint.marginal(&u_idx);
+        Ok(StepOut {
+            next_mean,
+            next_cov,
+            action_mean,
+            action_cov,
+            tape: StepTape {
+                joint,
+                trig,
+                policy_idx: self.spec.policy_inputs.clone(),
+                policy: (store_c(&pmo), pcache),
+                v_idx,
+                squash,
+                u_idx,
+                gp_idx,
+                gp: (gp_out.c, gcache),
+                y_idx,
+            },
+        })
+    }
+
+    /// Reverse of [`Predictor::step`]: from the adjoints of the next state (and optionally
+    /// of the action distribution) to the adjoints of `(m, s)`; policy-parameter adjoints
+    /// are added to `p_bar`.
+    pub fn step_backward(
+        &self,
+        tape: &StepTape<P::Cache>,
+        next_bar: &GaussianBar,
+        action_bar: Option<&GaussianBar>,
+        p_bar: &mut [f64],
+    ) -> Result<GaussianBar, LearnError> {
+        let d0 = self.spec.state_dim;
+        let mut zbar = JointBar::zeros(tape.joint.dim());
+        let rel = |k: usize| self.spec.targets[k] == Target::Relative;
+        for k in 0..d0 {
+            zbar.mean[tape.y_idx[k]] += next_bar.mean[k];
+            if rel(k) {
+                zbar.mean[k] += next_bar.mean[k];
+            }
+        }
+        for k in 0..d0 {
+            let rows: &[usize] = if rel(k) {
+                &[tape.y_idx[k], k]
+            } else {
+                &[tape.y_idx[k]]
+            };
+            for l in 0..d0 {
+                let cols: &[usize] = if rel(l) {
+                    &[tape.y_idx[l], l]
+                } else {
+                    &[tape.y_idx[l]]
+                };
+                let g = next_bar.cov[(k, l)];
+                for &r in rows {
+                    for &c in cols {
+                        zbar.cov[(r, c)] += g;
+                    }
+                }
+            }
+        }
+        if let Some(ab) = action_bar {
+            zbar.add_marginal(&tape.u_idx, ab);
+        }
+        // Dynamics GP.
+        let mb = zbar.pop_append(&tape.joint, &tape.gp_idx, tape.gp.0.as_ref());
+        let cov_bar = mb.cov;
+        let v_bar = mb.c.expect("pop_append returns C̄");
+        let ia = moments::backward(
+            &self.dynamics,
+            &tape.gp.1,
+            MomentsAdjoint {
+                mean: &mb.mean,
+                cov: cov_bar.as_ref(),
+                v: v_bar.as_ref(),
+            },
+            false,
+        )?;
+        zbar.add_marginal(
+            &tape.gp_idx,
+            &GaussianBar {
+                mean: ia.m,
+                cov: ia.s,
+            },
+        );
+        // Squashing.
+        if let (Some(sq), Some((c, cache))) = (self.squash, &tape.squash) {
+            let mb = zbar.pop_append(&tape.joint, &tape.v_idx, c.as_ref());
+            let gb = sq.backward(cache, &mb);
+            zbar.add_marginal(&tape.v_idx, &gb);
+        }
+        // Policy.
+        let mb = zbar.pop_append(&tape.joint, &tape.policy_idx, tape.policy.0.as_ref());
+        let gb = self.policy.backward(&tape.policy.1, &mb, p_bar);
+        zbar.add_marginal(&tape.policy_idx, &gb);
+        // Time is a constant: nothing flows back through it.
+        if self.spec.time_input {
+            let n = zbar.dim() - 1;
+            zbar.mean.truncate(n);
+            zbar.cov = Mat::from_fn(n, n, |i, j| zbar.cov[(i, j)]);
+        }
+        // Trigonometric augmentation.
+        if let (Some(tr), Some((c, cache))) = (&self.trig, &tape.trig) {
+            let all: Vec<usize> = (0..d0).collect();
+            let mb = zbar.pop_append(&tape.joint, &all, c.as_ref());
+            let gb = tr.backward(cache, &mb);
+            zbar.add_marginal(&all, &gb);
+        }
+        debug_assert_eq!(zbar.dim(), d0);
+        Ok(zbar.into_gaussian_bar())
+    }
+}

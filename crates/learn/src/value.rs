@@ -1,0 +1,220 @@
+//! The expected return of a policy over a horizon and its gradient w.r.t. every policy
+//! parameter by one reverse sweep (thesis eq. 4-7 with the costs of §4-2).
+//!
+//! `J = (1/K) Σ_k Σ_{t=1..H} γ^t (w1·E[c(x_t)] + w2·std[c(x_t)] + w3·E[c_a(u_{t−1})])`
+//!
+//! where `c` is the sum of the saturating state costs, `c_a` the energy cost of the action
+//! that led to `x_t`, and K the number of start distributions. The start state is not
+//! charged (PILCO's `value`). The reverse sweep visits each step once, so a value+gradient
+//! costs a small constant times a value, whatever the number of policy parameters.
+
+use crate::step::{Predictor, StepTape};
+use crate::LearnError;
+use faer::Mat;
+use rayon::prelude::*;
+use vicpilco_pilco::cost::{CostSum, EnergyCost};
+use vicpilco_pilco::policy::Policy;
+use vicpilco_pilco::{CostBar, GaussianBar};
+
+/// The immediate cost and the discounting of the return.
+#[derive(Clone, Debug)]
+pub struct ReturnSpec {
+    /// Sum of saturating costs on the state (None: no state cost).
+    pub state_cost: Option<CostSum>,
+    /// w1: weight of `E[c]`.
+    pub w_mean: f64,
+    /// w2: weight of `std[c]`; negative rewards exploration.
+    pub w_std: f64,
+    /// Energy cost on the action and its weight w3.
+    pub energy: Option<(EnergyCost, f64)>,
+    /// γ.
+    pub gamma: f64,
+    /// H.
+    pub horizon: usize,
+}
+
+/// One predicted step as recorded for reports.
+#[derive(Clone, Debug)]
+pub struct PredictedStep {
+    pub mean: Vec<f64>,
+    pub cov: Mat<f64>,
+    pub action_mean: Vec<f64>,
+    pub action_cov: Mat<f64>,
+    /// `E[c]`, `Var[c]` of the state cost, `E[c_a]` of the energy cost (undiscounted).
+    pub cost_mean: f64,
+    pub cost_var: f64,
+    pub energy_mean: f64,
+    /// The weighted immediate cost `w1 E[c] + w2 std[c] + w3 E[c_a]`.
+    pub immediate: f64,
+}
+
+/// The result of [`value`].
+#[derive(Clone, Debug)]
+pub struct ValueOut {
+    pub j: f64,
+    /// `dJ/dψ` in the policy's parameter order, when asked for.
+    pub grad: Option<Vec<f64>>,
+    /// One predicted trajectory per start distribution.
+    pub trajectories: Vec<Vec<PredictedStep>>,
+}
+
+/// Return, its gradient (when asked) and the predicted trajectory from one start.
+type StartValue = (f64, Option<Vec<f64>>, Vec<PredictedStep>);
+
+struct StepRecord<C> {
+    tape: StepTape<C>,
+    cost_cache: Option<vicpilco_pilco::cost::CostSumCache>,
+    energy_cache: Option<vicpilco_pilco::cost::EnergyCache>,
+    std: f64,
+}
+
+fn one_start<P: Policy>(
+    pred: &Predictor<'_, P>,
+    spec: &ReturnSpec,
+    m0: &[f64],
+    s0: &Mat<f64>,
+    with_grad: bool,
+) -> Result<StartValue, LearnError>
+where
+    P::Cache: Send,
+{
+    let mut m = m0.to_vec();
+    let mut s = s0.clone();
+    let mut j = 0.0;
+    let mut records = Vec::with_capacity(if with_grad { spec.horizon } else { 0 });
+    let mut steps = Vec::with_capacity(spec.horizon);
+    for t in 0..spec.horizon {
+        let out = pred.step(t, &m, &s)?;
+        let disc = spec.gamma.powi(t as i32 + 1);
+        let (cost_mean, cost_var, cost_cache) = match &spec.state_cost {
+            Some(c) => {
+                let (cm, cache) = c.forward(&out.next_mean, out.next_cov.as_ref());
+                (cm.mean, cm.var, Some(cache))
+            }
+            None => (0.0, 0.0, None),
+        };
+        let (energy_mean, energy_cache) = match &spec.energy {
+            Some((e, _)) => {
+                let (cm, cache) = e.forward(&out.action_mean, out.action_cov.as_ref());
+                (cm.mean, Some(cache))
+            }
+            None => (0.0, None),
+        };
+        let std = cost_var.max(0.0).sqrt();
+        let w3 = spec.energy.as_ref().map_or(0.0, |(_, w)| *w);
+        let immediate = spec.w_mean * cost_mean + spec.w_std * std + w3 * energy_mean;
+        if !immediate.is_finite() {
+            return Err(LearnError::NonFinite(format!(
+                "predicted immediate cost at step {} is {immediate}",
+                t + 1
+            )));
+        }
+        j += disc * immediate;
+        steps.push(PredictedStep {
+            mean: out.next_mean.clone(),
+            cov: out.next_cov.clone(),
+            action_mean: out.action_mean.clone(),
+            action_cov: out.action_cov.clone(),
+            cost_mean,
+            cost_var,
+            energy_mean,
+            immediate,
+        });
+        m = out.next_mean;
+        s = out.next_cov;
+        if with_grad {
+            records.push(StepRecord {
+                tape: out.tape,
+                cost_cache,
+                energy_cache,
+                std,
+            });
+        }
+    }
+    if !with_grad {
+        return Ok((j, None, steps));
+    }
+    let d0 = m0.len();
+    let mut p_bar = vec![0.0; pred.policy.n_params()];
+    let mut next_bar = GaussianBar::zeros(d0);
+    for t in (0..spec.horizon).rev() {
+        let rec = &records[t];
+        let disc = spec.gamma.powi(t as i32 + 1);
+        if let (Some(c), Some(cache)) = (&spec.state_cost, &rec.cost_cache) {
+            let var_bar = if rec.std > 0.0 {
+                spec.w_std / (2.0 * rec.std)
+            } else {
+                0.0
+            };
+            let gb = c.backward(
+                cache,
+                &CostBar {
+                    mean: disc * spec.w_mean,
+                    var: disc * var_bar,
+                    c: None,
+                },
+            );
+            for k in 0..d0 {
+                next_bar.mean[k] += gb.mean[k];
+                for l in 0..d0 {
+                    next_bar.cov[(k, l)] += gb.cov[(k, l)];
+                }
+            }
+        }
+        let action_bar = match (&spec.energy, &rec.energy_cache) {
+            (Some((e, w3)), Some(cache)) => Some(e.backward(
+                cache,
+                &CostBar {
+                    mean: disc * w3,
+                    var: 0.0,
+                    c: None,
+                },
+            )),
+            _ => None,
+        };
+        next_bar = pred.step_backward(&rec.tape, &next_bar, action_bar.as_ref(), &mut p_bar)?;
+    }
+    Ok((j, Some(p_bar), steps))
+}
+
+/// Expected return (and optionally its gradient) averaged over the start distributions.
+pub fn value<P>(
+    pred: &Predictor<'_, P>,
+    spec: &ReturnSpec,
+    starts: &[(Vec<f64>, Mat<f64>)],
+    with_grad: bool,
+) -> Result<ValueOut, LearnError>
+where
+    P: Policy + Sync,
+    P::Cache: Send,
+{
+    if starts.is_empty() {
+        return Err(LearnError::Spec(
+            "value needs at least one start distribution".into(),
+        ));
+    }
+    let results: Vec<_> = starts
+        .par_iter()
+        .map(|(m0, s0)| one_start(pred, spec, m0, s0, with_grad))
+        .collect();
+    let k = starts.len() as f64;
+    let mut j = 0.0;
+    let mut grad = with_grad.then(|| vec![0.0; pred.policy.n_params()]);
+    let mut trajectories = Vec::with_capacity(starts.len());
+    // Summed in start order, so the result does not depend on thread scheduling.
+    for r in results {
+        let (jk, gk, steps) = r?;
+        j += jk / k;
+        if let (Some(g), Some(gk)) = (grad.as_mut(), gk) {
+            for (a, b) in g.iter_mut().zip(gk) {
+                *a += b / k;
+            }
+        }
+        trajectories.push(steps);
+    }
+    Ok(ValueOut {
+        j,
+        grad,
+        trajectories,
+    })
+}

@@ -1,0 +1,152 @@
+//! Every case of every oracle kind (`VICPILCO_ORACLE_DIR`, default `../shared/oracle`) must
+//! match the original PILCO MATLAB code at the oracle README's tolerance, and every stored
+//! output array of a case must actually be compared.
+
+use std::collections::BTreeSet;
+use std::path::PathBuf;
+use vicpilco_oracle::{checkers, default_dir, discover, Case};
+
+/// The oracle directory, or `None` (with a notice) when it is absent outside CI.
+fn oracle_dir() -> Option<PathBuf> {
+    let dir = default_dir();
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    let msg = format!(
+        "oracle directory {} not found (set VICPILCO_ORACLE_DIR)",
+        dir.display()
+    );
+    if std::env::var_os("CI").is_some() {
+        panic!("{msg}");
+    }
+    eprintln!("skipping: {msg}");
+    None
+}
+
+/// `inputs`: the fields of this kind that are inputs; every other field is an output that
+/// must be compared.
+fn check_kind(kind: &str, inputs: &[&str]) {
+    let Some(dir) = oracle_dir() else { return };
+    let found = discover(&dir).expect("oracle directory readable");
+    let files = found
+        .get(kind)
+        .unwrap_or_else(|| panic!("no `{kind}` cases in {}", dir.display()));
+    assert!(
+        !files.is_empty(),
+        "no `{kind}` case files in {}",
+        dir.display()
+    );
+    let checker = checkers()
+        .into_iter()
+        .find(|c| c.kind() == kind)
+        .unwrap_or_else(|| panic!("no checker for `{kind}`"));
+    let mut failures = Vec::new();
+    let mut worst = 0.0f64;
+    for f in files {
+        let case = Case::load(f).unwrap();
+        let comparisons = checker
+            .check(&case)
+            .unwrap_or_else(|e| panic!("{kind}/{}: {e}", case.name));
+        for c in &comparisons {
+            worst = worst.max(c.rel_err);
+            if !c.passed() {
+                failures.push(format!(
+                    "{kind}/{}: {} rel err {:.3e} > {:.0e}",
+                    case.name, c.field, c.rel_err, c.tol
+                ));
+            }
+        }
+        // Nested objects (`prop1`) count as compared when any of their arrays is.
+        let compared: BTreeSet<&str> = comparisons
+            .iter()
+            .map(|c| c.field.split('.').next().unwrap_or_default())
+            .collect();
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(f).unwrap()).unwrap();
+        for key in json.as_object().unwrap().keys() {
+            if !inputs.contains(&key.as_str()) && !["kind", "case", "seed"].contains(&key.as_str())
+            {
+                assert!(
+                    compared.contains(key.as_str()),
+                    "{kind}/{}: stored output `{key}` is not compared",
+                    case.name
+                );
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    eprintln!("{kind}: {} cases, max rel err {worst:.2e}", files.len());
+}
+
+const GP_INPUTS: &[&str] = &["D", "E", "N", "inputs", "targets", "hyp", "m", "s"];
+
+#[test]
+fn gp0_matches_pilco() {
+    check_kind("gp0", GP_INPUTS);
+}
+
+#[test]
+fn gp2_matches_pilco() {
+    check_kind("gp2", GP_INPUTS);
+}
+
+#[test]
+fn gsat_matches_pilco() {
+    check_kind("gSat", &["d", "I", "i_1based", "e", "m", "s"]);
+}
+
+#[test]
+fn gtrig_matches_pilco() {
+    check_kind("gTrig", &["d", "I", "i_1based", "e", "m", "s"]);
+}
+
+#[test]
+fn loss_sat_matches_pilco() {
+    check_kind("lossSat", &["D", "z", "W", "m", "s"]);
+}
+
+#[test]
+fn conlin_matches_pilco() {
+    check_kind("conlin", &["D", "E", "w", "b", "m", "s", "P"]);
+}
+
+#[test]
+fn congp_matches_pilco() {
+    check_kind(
+        "congp",
+        &["D", "E", "N", "hyp", "inputs", "targets", "m", "s", "P"],
+    );
+}
+
+#[test]
+fn value_matches_pilco() {
+    check_kind(
+        "value",
+        &[
+            "policy_type",
+            "D0",
+            "U",
+            "H",
+            "gamma",
+            "angi_1based",
+            "dyni_1based",
+            "poli_1based",
+            "difi_1based",
+            "maxU",
+            "dyn_inputs",
+            "dyn_targets",
+            "dyn_hyp",
+            "policy_nc",
+            "policy_hyp",
+            "policy_inputs",
+            "policy_targets",
+            "policy_w",
+            "policy_b",
+            "cost_z",
+            "cost_W",
+            "m0",
+            "S0",
+            "P",
+        ],
+    );
+}
