@@ -4,7 +4,13 @@
 use faer::Mat;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
+use vicpilco_gp::moments::MmModel;
 use vicpilco_gp::{GpModel, Hyper};
+use vicpilco_learn::step::{Predictor, StepSpec, Target};
+use vicpilco_learn::value::ReturnSpec;
+use vicpilco_pilco::cost::CostSum;
+use vicpilco_pilco::policy::RbfPolicy;
+use vicpilco_pilco::squash::{PartialSat, SatRange};
 
 #[derive(Debug, thiserror::Error)]
 pub enum WorkloadError {
@@ -106,5 +112,77 @@ impl W1 {
             &self.train_init_log_signal_std,
             &self.train_init_log_noise_std,
         )
+    }
+}
+
+/// The W1 prediction problem, ready for [`vicpilco_learn::value::value`].
+pub struct W1Problem {
+    pub spec: StepSpec,
+    pub policy: RbfPolicy,
+    pub squash: PartialSat,
+    pub dynamics: GpModel,
+    pub ret: ReturnSpec,
+    pub start: (Vec<f64>, Mat<f64>),
+}
+
+impl W1Problem {
+    pub fn predictor(&self) -> Result<Predictor<'_, RbfPolicy>, vicpilco_learn::LearnError> {
+        Predictor::new(
+            &self.spec,
+            &self.policy,
+            Some(&self.squash),
+            MmModel::with_uncertainty(&self.dynamics),
+            None,
+        )
+    }
+}
+
+impl W1 {
+    /// State → RBF policy on all states → sine saturation → full GP on (state, action) with
+    /// difference targets → saturating cost on `cost_dims`, as the bench README specifies.
+    pub fn problem(&self) -> Result<W1Problem, Box<dyn std::error::Error + Send + Sync>> {
+        let (d, u) = (self.state_dim, self.action_dim);
+        let spec = StepSpec {
+            state_dim: d,
+            angles: vec![],
+            time_input: false,
+            policy_inputs: (0..d).collect(),
+            dyn_inputs: (0..d).collect(),
+            targets: vec![Target::Relative; d],
+            dt: 1.0,
+        };
+        let log_ls = rows_to_mat(&self.policy_log_lengthscales);
+        let snr = self.policy_signal_std / self.policy_noise_std;
+        let policy = RbfPolicy::new(
+            rows_to_mat(&self.policy_inputs),
+            rows_to_mat(&self.policy_targets),
+            log_ls.as_ref(),
+            snr,
+        )?;
+        let ranges: Vec<SatRange> = self
+            .max_action
+            .iter()
+            .map(|&a_max| SatRange::Symmetric { a_max })
+            .collect();
+        let squash = PartialSat::new(u, &(0..u).collect::<Vec<_>>(), &ranges)?;
+        let ret = ReturnSpec {
+            state_cost: Some(CostSum::loss_sat(
+                rows_to_mat(&self.cost_W).as_ref(),
+                &self.cost_target,
+            )?),
+            w_mean: 1.0,
+            w_std: 0.0,
+            energy: None,
+            gamma: self.gamma,
+            horizon: self.horizon,
+        };
+        Ok(W1Problem {
+            spec,
+            policy,
+            squash,
+            dynamics: self.dynamics_gp()?,
+            ret,
+            start: (self.m0.clone(), rows_to_mat(&self.S0)),
+        })
     }
 }
