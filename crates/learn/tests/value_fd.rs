@@ -1,0 +1,290 @@
+//! dJ/dψ from the reverse sweep against central finite differences of J, over the variants
+//! the learning loop uses: linear and RBF policies, with and without squashing (symmetric and
+//! non-negative), relative and absolute targets, an angle (trig augmentation), time as an
+//! input, a prior-mean shift, the std and energy terms, discounting and K > 1 starts.
+
+use faer::Mat;
+use rand::{RngExt, SeedableRng};
+use rand_distr::StandardNormal;
+use vicpilco_gp::fd::{directional, rel_diff};
+use vicpilco_gp::moments::MmModel;
+use vicpilco_gp::{GpModel, Hyper};
+use vicpilco_learn::step::{Predictor, StepSpec, Target};
+use vicpilco_learn::value::{value, ReturnSpec};
+use vicpilco_pilco::cost::{CostSum, EnergyCost, SaturatingCost};
+use vicpilco_pilco::policy::{LinearPolicy, Policy, RbfPolicy};
+use vicpilco_pilco::squash::{PartialSat, SatRange};
+
+type Rng = rand::rngs::ChaCha8Rng;
+
+fn normal(rng: &mut Rng) -> f64 {
+    rng.sample(StandardNormal)
+}
+
+fn random_gp(rng: &mut Rng, n: usize, d_in: usize, d_out: usize) -> GpModel {
+    let x = Mat::from_fn(n, d_in, |_, _| normal(rng));
+    let y = Mat::from_fn(n, d_out, |i, j| {
+        0.3 * (x[(i, j % d_in)] + 0.5 * x[(i, d_in - 1)]).sin() + 0.01 * normal(rng)
+    });
+    let hyp = (0..d_out)
+        .map(|_| Hyper {
+            log_ls: (0..d_in)
+                .map(|_| 0.3 + 0.5 * rng.random_range(0.0..1.0))
+                .collect(),
+            log_sf: -1.0,
+            log_sn: -4.0,
+        })
+        .collect();
+    GpModel::new(x, y, hyp).unwrap()
+}
+
+struct Variant {
+    name: &'static str,
+    rbf: bool,
+    squash: Option<Vec<SatRange>>,
+    angles: Vec<usize>,
+    time_input: bool,
+    targets: Vec<Target>,
+    prior_shift: bool,
+    w_std: f64,
+    energy: bool,
+    gamma: f64,
+    starts: usize,
+}
+
+fn check(v: Variant, seed: u64) {
+    let mut rng = Rng::seed_from_u64(seed);
+    let d0 = v.targets.len();
+    let u = 2;
+    let spec = StepSpec {
+        state_dim: d0,
+        angles: v.angles.clone(),
+        time_input: v.time_input,
+        policy_inputs: (0..d0 + 2 * v.angles.len() + v.time_input as usize)
+            .filter(|&i| !v.angles.contains(&i))
+            .collect(),
+        dyn_inputs: (0..d0 + 2 * v.angles.len() + v.time_input as usize)
+            .filter(|&i| !v.angles.contains(&i))
+            .collect(),
+        targets: v.targets.clone(),
+        dt: 0.1,
+    };
+    let p_in = spec.policy_inputs.len();
+    let gp = random_gp(&mut rng, 25, spec.dyn_inputs.len() + u, d0);
+    let horizon = 5;
+    let shift: Vec<Vec<f64>> = (0..horizon)
+        .map(|t| (0..d0).map(|k| 0.01 * (t + k) as f64).collect())
+        .collect();
+    let squash = v
+        .squash
+        .as_ref()
+        .map(|r| PartialSat::new(u, &[0, 1], r).unwrap());
+    let mut costs =
+        vec![SaturatingCost::new(&[0], Mat::from_fn(1, 1, |_, _| 4.0).as_ref(), &[0.5]).unwrap()];
+    if d0 > 2 {
+        costs.push(
+            SaturatingCost::new(
+                &[1, 2],
+                Mat::from_fn(2, 2, |i, j| if i == j { 2.0 } else { 0.3 }).as_ref(),
+                &[0.1, -0.2],
+            )
+            .unwrap(),
+        );
+    }
+    let ret = ReturnSpec {
+        state_cost: Some(CostSum::new(d0, costs).unwrap()),
+        w_mean: 1.0,
+        w_std: v.w_std,
+        energy: v
+            .energy
+            .then(|| (EnergyCost::new(&[2.0, 3.0], &[true, true]).unwrap(), 0.05)),
+        gamma: v.gamma,
+        horizon,
+    };
+    let starts: Vec<(Vec<f64>, Mat<f64>)> = (0..v.starts)
+        .map(|k| {
+            let m: Vec<f64> = (0..d0).map(|i| 0.1 * (i + k) as f64).collect();
+            let s = Mat::from_fn(d0, d0, |i, j| if i == j { 0.02 } else { 0.003 });
+            (m, s)
+        })
+        .collect();
+    let run = |params: &[f64], with_grad: bool| -> (f64, Option<Vec<f64>>) {
+        if v.rbf {
+            let mut pol = rbf_template(p_in, u);
+            pol.set_params(params).unwrap();
+            let pred = Predictor::new(
+                &spec,
+                &pol,
+                squash.as_ref(),
+                MmModel::with_uncertainty(&gp),
+                v.prior_shift.then_some(shift.as_slice()),
+            )
+            .unwrap();
+            let out = value(&pred, &ret, &starts, with_grad).unwrap();
+            (out.j, out.grad)
+        } else {
+            let mut pol = LinearPolicy::zeros(p_in, u);
+            pol.set_params(params).unwrap();
+            let pred = Predictor::new(
+                &spec,
+                &pol,
+                squash.as_ref(),
+                MmModel::with_uncertainty(&gp),
+                v.prior_shift.then_some(shift.as_slice()),
+            )
+            .unwrap();
+            let out = value(&pred, &ret, &starts, with_grad).unwrap();
+            (out.j, out.grad)
+        }
+    };
+    let p0: Vec<f64> = if v.rbf {
+        let mut p = rbf_template(p_in, u).params();
+        let n_hyp = (p_in + 2) * u;
+        for x in p[n_hyp..].iter_mut() {
+            *x += 0.3 * normal(&mut rng);
+        }
+        p
+    } else {
+        (0..u + u * p_in).map(|_| 0.3 * normal(&mut rng)).collect()
+    };
+    let (j0, grad) = run(&p0, true);
+    assert!(j0.is_finite());
+    let grad = grad.unwrap();
+    for trial in 0..3 {
+        let dir: Vec<f64> = p0.iter().map(|_| normal(&mut rng)).collect();
+        let numeric = directional(&mut |p: &[f64]| run(p, false).0, &p0, &dir, 1e-5);
+        let analytic: f64 = grad.iter().zip(&dir).map(|(g, d)| g * d).sum();
+        let err = rel_diff(analytic, numeric, 1e-8);
+        assert!(
+            err < 1e-6,
+            "{} trial {trial}: analytic {analytic:.12e} numeric {numeric:.12e} rel {err:.2e}",
+            v.name
+        );
+    }
+}
+
+fn rbf_template(d: usize, e: usize) -> RbfPolicy {
+    let nc = 4;
+    let centres = Mat::from_fn(nc, d, |i, k| 0.2 * ((i * 3 + k * 5) % 7) as f64 - 0.6);
+    let targets = Mat::from_fn(nc, e, |i, a| 0.1 * ((i + 2 * a) % 5) as f64 - 0.2);
+    let log_ls = Mat::from_fn(d, e, |k, a| 0.1 * (k + a) as f64);
+    RbfPolicy::new(centres, targets, log_ls.as_ref(), 100.0).unwrap()
+}
+
+#[test]
+fn linear_policy_plain() {
+    check(
+        Variant {
+            name: "linear, no squash, relative",
+            rbf: false,
+            squash: None,
+            angles: vec![],
+            time_input: false,
+            targets: vec![Target::Relative; 3],
+            prior_shift: false,
+            w_std: 0.0,
+            energy: false,
+            gamma: 1.0,
+            starts: 1,
+        },
+        1,
+    );
+}
+
+#[test]
+fn linear_policy_saturated_mixed_targets_energy() {
+    check(
+        Variant {
+            name: "linear, symmetric squash, mixed targets, energy, std",
+            rbf: false,
+            squash: Some(vec![
+                SatRange::Symmetric { a_max: 2.0 },
+                SatRange::Symmetric { a_max: 3.0 },
+            ]),
+            angles: vec![],
+            time_input: false,
+            targets: vec![Target::Relative, Target::Absolute, Target::Relative],
+            prior_shift: false,
+            w_std: -0.25,
+            energy: true,
+            gamma: 0.9,
+            starts: 1,
+        },
+        2,
+    );
+}
+
+#[test]
+fn rbf_policy_nonnegative_squash_angle() {
+    check(
+        Variant {
+            name: "rbf, partial non-negative squash, angle",
+            rbf: true,
+            squash: Some(vec![
+                SatRange::Bounded {
+                    a_min: 0.5,
+                    a_max: 3.0,
+                },
+                SatRange::Symmetric { a_max: 1.5 },
+            ]),
+            angles: vec![2],
+            time_input: false,
+            targets: vec![Target::Relative; 3],
+            prior_shift: false,
+            w_std: 0.0,
+            energy: false,
+            gamma: 1.0,
+            starts: 1,
+        },
+        3,
+    );
+}
+
+#[test]
+fn rbf_policy_time_prior_mean_energy_two_starts() {
+    check(
+        Variant {
+            name: "rbf, time input, prior mean, energy, std, K = 2",
+            rbf: true,
+            squash: Some(vec![
+                SatRange::Bounded {
+                    a_min: 0.5,
+                    a_max: 3.0,
+                },
+                SatRange::Bounded {
+                    a_min: 0.2,
+                    a_max: 2.0,
+                },
+            ]),
+            angles: vec![],
+            time_input: true,
+            targets: vec![Target::Relative, Target::Relative, Target::Absolute],
+            prior_shift: true,
+            w_std: -0.25,
+            energy: true,
+            gamma: 1.0,
+            starts: 2,
+        },
+        4,
+    );
+}
+
+#[test]
+fn rbf_policy_unsquashed_absolute() {
+    check(
+        Variant {
+            name: "rbf, no squash, absolute targets",
+            rbf: true,
+            squash: None,
+            angles: vec![],
+            time_input: false,
+            targets: vec![Target::Absolute; 2],
+            prior_shift: false,
+            w_std: 0.0,
+            energy: false,
+            gamma: 1.0,
+            starts: 1,
+        },
+        5,
+    );
+}
