@@ -10,7 +10,7 @@ use vicpilco_pilco::{CostBar, CostMoments};
 
 fn flat_cost(o: &CostMoments) -> Vec<f64> {
     let mut v = vec![o.mean, o.var];
-    v.extend_from_slice(&o.c);
+    v.extend_from_slice(&o.v);
     v
 }
 
@@ -18,7 +18,7 @@ fn cost_bar(yb: &[f64]) -> CostBar {
     CostBar {
         mean: yb[0],
         var: yb[1],
-        c: Some(yb[2..].to_vec()),
+        v: Some(yb[2..].to_vec()),
     }
 }
 
@@ -120,7 +120,7 @@ fn cost_sum_of_independent_costs_adds_variances() {
         a.var + b.var
     );
     for k in 0..4 {
-        assert!((both.c[k] - a.c[k] - b.c[k]).abs() < 1e-14);
+        assert!((both.v[k] - a.v[k] - b.v[k]).abs() < 1e-14);
     }
 }
 
@@ -147,12 +147,12 @@ fn subset_cost_equals_loss_sat_on_the_marginal() {
         .forward(&mm, sm.as_ref());
     assert!((sub.mean - full.mean).abs() < 1e-14);
     assert!((sub.var - full.var).abs() < 1e-14);
-    assert!(sub.c[0] == 0.0 && sub.c[2] == 0.0);
+    assert!(sub.v[0] == 0.0 && sub.v[2] == 0.0);
     // C of the marginal is s_JJ⁻¹ Cov[x_J, c]; C of the full state is s⁻¹ Cov[x, c]: both
     // give the same Cov[x_J, c].
     for (a, &da) in [3usize, 1].iter().enumerate() {
-        let cov_full: f64 = (0..4).map(|k| s[(da, k)] * sub.c[k]).sum();
-        let cov_sub: f64 = (0..2).map(|k| sm[(a, k)] * full.c[k]).sum();
+        let cov_full: f64 = (0..4).map(|k| s[(da, k)] * sub.v[k]).sum();
+        let cov_sub: f64 = (0..2).map(|k| sm[(a, k)] * full.v[k]).sum();
         assert!((cov_full - cov_sub).abs() < 1e-14);
     }
 }

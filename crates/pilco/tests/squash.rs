@@ -127,7 +127,7 @@ fn partial_saturation_maps_onto_the_intended_intervals() {
     assert!((p.mean[0] - (425.0 + g.mean[0])).abs() < 1e-12);
     assert!((p.mean[1] - g.mean[1]).abs() < 1e-15);
     assert_eq!(flat(&p.cov), flat(&g.cov));
-    assert_eq!(flat(&p.c), flat(&g.c));
+    assert_eq!(flat(&p.v), flat(&g.v));
     assert!(PartialSat::new(
         1,
         &[0],
@@ -197,7 +197,7 @@ fn gsat_and_gtrig_moments_agree_with_sampling() {
                     .map(|(x, y)| (x[k] - mk) * (y[a] - ma))
                     .sum::<f64>()
                     / n;
-                let want: f64 = (0..d).map(|l| s[(k, l)] * mom.c[(l, a)]).sum();
+                let want: f64 = (0..d).map(|l| s[(k, l)] * mom.v[(l, a)]).sum();
                 assert!((cxy - want).abs() < 0.03, "cross {k}{a}: {cxy} vs {want}");
             }
         }
