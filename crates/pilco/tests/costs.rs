@@ -201,6 +201,7 @@ fn cost_sum_variance_agrees_with_monte_carlo() {
         "MC var {var:.5}, exact {:.5}, Σ Var[c_k] {sum_of_vars:.5}",
         mom.var
     );
+    check_cross_cov(&xs, &cs, &s, &mom.v, 0.02);
     // The cross terms are not negligible here, so the check has teeth.
     assert!(
         (mom.var - sum_of_vars).abs() > 0.15 * mom.var,
@@ -250,10 +251,28 @@ fn energy_cost_moments_agree_with_monte_carlo_and_exclusion_works() {
         "var {var} vs {}",
         mom.var
     );
+    check_cross_cov(&xs, &cs, &sig, &mom.v, 0.05);
     // The excluded action does not enter at all.
     let mut mu2 = mu.clone();
     mu2[1] = -100.0;
     assert_eq!(cost.forward(&mu2, sig.as_ref()).0.mean, mom.mean);
+}
+
+/// Sample `Cov[x, c]` against `s · v` (`v = s⁻¹ Cov[x, c]`), absolute tolerance `tol`.
+fn check_cross_cov(xs: &[Vec<f64>], cs: &[f64], s: &Mat<f64>, v: &[f64], tol: f64) {
+    let n = cs.len() as f64;
+    let mc = cs.iter().sum::<f64>() / n;
+    for k in 0..v.len() {
+        let mk = xs.iter().map(|x| x[k]).sum::<f64>() / n;
+        let got = xs
+            .iter()
+            .zip(cs)
+            .map(|(x, c)| (x[k] - mk) * (c - mc))
+            .sum::<f64>()
+            / n;
+        let want: f64 = (0..v.len()).map(|l| s[(k, l)] * v[l]).sum();
+        assert!((got - want).abs() < tol, "Cov[x_{k}, c]: {got} vs {want}");
+    }
 }
 
 #[test]

@@ -157,20 +157,24 @@ fn gsat_and_gtrig_moments_agree_with_sampling() {
     let s = rand_spd(&mut r, d, 0.5);
     let sat = SineSat::new(d, &idx, &[1.0, 2.0]).unwrap();
     let trig = TrigAug::new(d, &idx, &[1.0, 1.0]).unwrap();
+    let x = [0.7, 9.0, -2.0];
+    assert_eq!(
+        trig.apply(&x),
+        vec![x[0].sin(), x[0].cos(), x[2].sin(), x[2].cos()]
+    );
+    assert_eq!(
+        sat.apply(&x)[1],
+        2.0 * (9.0 * x[2].sin() + (3.0 * x[2]).sin()) / 8.0
+    );
     let xs = sample_gaussian(&mut r, &m, &s, 20000);
     for (mom, fx) in [
         (
             sat.forward(&m, s.as_ref()).0,
-            Box::new(|x: &[f64]| {
-                vec![
-                    (9.0 * x[0].sin() + (3.0 * x[0]).sin()) / 8.0,
-                    2.0 * (9.0 * x[2].sin() + (3.0 * x[2]).sin()) / 8.0,
-                ]
-            }) as Box<dyn Fn(&[f64]) -> Vec<f64>>,
+            Box::new(|x: &[f64]| sat.apply(x)) as Box<dyn Fn(&[f64]) -> Vec<f64>>,
         ),
         (
             trig.forward(&m, s.as_ref()).0,
-            Box::new(|x: &[f64]| vec![x[0].sin(), x[0].cos(), x[2].sin(), x[2].cos()]),
+            Box::new(|x: &[f64]| trig.apply(x)),
         ),
     ] {
         let ys: Vec<Vec<f64>> = xs.iter().map(|x| fx(x)).collect();
