@@ -16,10 +16,12 @@
 //! ## Conventions (all blocks)
 //!
 //! * Input `x ~ N(m, s)`: `m` a slice of length D, `s` a symmetric D×D [`faer::Mat`].
-//! * Output [`Moments`]: mean `M`, covariance `S` and `C = s⁻¹ Cov[x, y]` (PILCO's `C`,
-//!   called `V` for policies), D×E. Scalar-valued costs return [`CostMoments`].
+//! * Output [`Moments`] (the GP crate's type): mean `M`, covariance `S` and
+//!   `v = s⁻¹ Cov[x, y]`, D×E (PILCO's `C` for `gSat`, `gTrig`, `lossSat`; `V` for policies
+//!   and GPs). Scalar-valued costs return [`CostMoments`].
+//!   (`C`, `V` below both mean this term.)
 //! * **Forward** returns the outputs and an opaque cache; **backward** is the vector-Jacobian
-//!   product: it takes the adjoints of the outputs (`M̄, S̄, C̄` in [`MomentsBar`]; `C̄`
+//!   product: it takes the adjoints of the outputs (`M̄, S̄, V̄` in [`MomentsBar`]; `V̄`
 //!   optional) and returns the adjoints of the input distribution ([`GaussianBar`]).
 //! * **Adjoint of a covariance input.** `s̄` is the plain gradient `∂f/∂s_kl` with the
 //!   entries of `s` treated as independent, then symmetrised, `(G + Gᵀ)/2`. With this,
@@ -47,32 +49,26 @@ pub use error::{PilcoError, Result};
 
 use faer::Mat;
 
-/// Mean, covariance and input-output term of a block's output `y` for `x ~ N(m, s)`.
-#[derive(Clone, Debug)]
-pub struct Moments {
-    /// `E[y]`, length E.
-    pub mean: Vec<f64>,
-    /// `Cov[y]`, E×E, symmetric.
-    pub cov: Mat<f64>,
-    /// `s⁻¹ Cov[x, y]`, D×E (PILCO's `C`, or `V` for policies).
-    pub c: Mat<f64>,
-}
+/// Mean `mean` (E), covariance `cov` (E×E) and input-output term `v = s⁻¹ Cov[x, y]` (D×E;
+/// PILCO's `C` for `gSat`/`gTrig`, `V` for policies and GPs) of a block's output `y` for
+/// `x ~ N(m, s)`. The same type as the GP moment matching returns, so blocks chain freely.
+pub use vicpilco_gp::moments::Moments;
 
-/// Adjoints of a block's outputs (`M̄`, `S̄`, `C̄`); `C̄ = None` means zero.
+/// Adjoints of a block's outputs (`M̄`, `S̄`, `V̄`/`C̄`); `v = None` means `V̄ = 0`.
 #[derive(Clone, Debug)]
 pub struct MomentsBar {
     pub mean: Vec<f64>,
     pub cov: Mat<f64>,
-    pub c: Option<Mat<f64>>,
+    pub v: Option<Mat<f64>>,
 }
 
 impl MomentsBar {
-    /// All-zero adjoints for a block with D inputs and E outputs (`C̄ = None`).
+    /// All-zero adjoints for a block with E outputs (`V̄ = None`).
     pub fn zeros(e: usize) -> Self {
         Self {
             mean: vec![0.0; e],
             cov: Mat::zeros(e, e),
-            c: None,
+            v: None,
         }
     }
 }
@@ -100,14 +96,14 @@ pub struct CostMoments {
     pub mean: f64,
     /// `Var[c]` (for saturating costs clamped to 0 below 1e-12, as PILCO's `lossSat`).
     pub var: f64,
-    /// `s⁻¹ Cov[x, c]`, length D (equals `∂E[c]/∂m`).
-    pub c: Vec<f64>,
+    /// `s⁻¹ Cov[x, c]`, length D (PILCO's `C`; equals `∂E[c]/∂m`).
+    pub v: Vec<f64>,
 }
 
-/// Adjoints of a scalar cost's outputs; `c = None` means zero.
+/// Adjoints of a scalar cost's outputs; `v = None` means zero.
 #[derive(Clone, Debug, Default)]
 pub struct CostBar {
     pub mean: f64,
     pub var: f64,
-    pub c: Option<Vec<f64>>,
+    pub v: Option<Vec<f64>>,
 }

@@ -10,7 +10,7 @@ use vicpilco_pilco::{CostBar, CostMoments};
 
 fn flat_cost(o: &CostMoments) -> Vec<f64> {
     let mut v = vec![o.mean, o.var];
-    v.extend_from_slice(&o.c);
+    v.extend_from_slice(&o.v);
     v
 }
 
@@ -18,7 +18,7 @@ fn cost_bar(yb: &[f64]) -> CostBar {
     CostBar {
         mean: yb[0],
         var: yb[1],
-        c: Some(yb[2..].to_vec()),
+        v: Some(yb[2..].to_vec()),
     }
 }
 
@@ -120,7 +120,7 @@ fn cost_sum_of_independent_costs_adds_variances() {
         a.var + b.var
     );
     for k in 0..4 {
-        assert!((both.c[k] - a.c[k] - b.c[k]).abs() < 1e-14);
+        assert!((both.v[k] - a.v[k] - b.v[k]).abs() < 1e-14);
     }
 }
 
@@ -147,12 +147,12 @@ fn subset_cost_equals_loss_sat_on_the_marginal() {
         .forward(&mm, sm.as_ref());
     assert!((sub.mean - full.mean).abs() < 1e-14);
     assert!((sub.var - full.var).abs() < 1e-14);
-    assert!(sub.c[0] == 0.0 && sub.c[2] == 0.0);
+    assert!(sub.v[0] == 0.0 && sub.v[2] == 0.0);
     // C of the marginal is s_JJ⁻¹ Cov[x_J, c]; C of the full state is s⁻¹ Cov[x, c]: both
     // give the same Cov[x_J, c].
     for (a, &da) in [3usize, 1].iter().enumerate() {
-        let cov_full: f64 = (0..4).map(|k| s[(da, k)] * sub.c[k]).sum();
-        let cov_sub: f64 = (0..2).map(|k| sm[(a, k)] * full.c[k]).sum();
+        let cov_full: f64 = (0..4).map(|k| s[(da, k)] * sub.v[k]).sum();
+        let cov_sub: f64 = (0..2).map(|k| sm[(a, k)] * full.v[k]).sum();
         assert!((cov_full - cov_sub).abs() < 1e-14);
     }
 }
@@ -201,6 +201,7 @@ fn cost_sum_variance_agrees_with_monte_carlo() {
         "MC var {var:.5}, exact {:.5}, Σ Var[c_k] {sum_of_vars:.5}",
         mom.var
     );
+    check_cross_cov(&xs, &cs, &s, &mom.v, 0.02);
     // The cross terms are not negligible here, so the check has teeth.
     assert!(
         (mom.var - sum_of_vars).abs() > 0.15 * mom.var,
@@ -250,10 +251,28 @@ fn energy_cost_moments_agree_with_monte_carlo_and_exclusion_works() {
         "var {var} vs {}",
         mom.var
     );
+    check_cross_cov(&xs, &cs, &sig, &mom.v, 0.05);
     // The excluded action does not enter at all.
     let mut mu2 = mu.clone();
     mu2[1] = -100.0;
     assert_eq!(cost.forward(&mu2, sig.as_ref()).0.mean, mom.mean);
+}
+
+/// Sample `Cov[x, c]` against `s · v` (`v = s⁻¹ Cov[x, c]`), absolute tolerance `tol`.
+fn check_cross_cov(xs: &[Vec<f64>], cs: &[f64], s: &Mat<f64>, v: &[f64], tol: f64) {
+    let n = cs.len() as f64;
+    let mc = cs.iter().sum::<f64>() / n;
+    for k in 0..v.len() {
+        let mk = xs.iter().map(|x| x[k]).sum::<f64>() / n;
+        let got = xs
+            .iter()
+            .zip(cs)
+            .map(|(x, c)| (x[k] - mk) * (c - mc))
+            .sum::<f64>()
+            / n;
+        let want: f64 = (0..v.len()).map(|l| s[(k, l)] * v[l]).sum();
+        assert!((got - want).abs() < tol, "Cov[x_{k}, c]: {got} vs {want}");
+    }
 }
 
 #[test]

@@ -79,5 +79,5 @@ fn linear_policy_moments_and_flat_order() {
     assert_eq!(o.mean, vec![7.0 + 1.0 - 2.0 + 1.5, 8.0 + 4.0 - 5.0 + 3.0]);
     let want = &w * &s * w.transpose();
     assert_eq!(flat(&o.cov), flat(&want));
-    assert_eq!(flat(&o.c), flat(&w.transpose().to_owned()));
+    assert_eq!(flat(&o.v), flat(&w.transpose().to_owned()));
 }

@@ -127,7 +127,7 @@ fn partial_saturation_maps_onto_the_intended_intervals() {
     assert!((p.mean[0] - (425.0 + g.mean[0])).abs() < 1e-12);
     assert!((p.mean[1] - g.mean[1]).abs() < 1e-15);
     assert_eq!(flat(&p.cov), flat(&g.cov));
-    assert_eq!(flat(&p.c), flat(&g.c));
+    assert_eq!(flat(&p.v), flat(&g.v));
     assert!(PartialSat::new(
         1,
         &[0],
@@ -157,20 +157,24 @@ fn gsat_and_gtrig_moments_agree_with_sampling() {
     let s = rand_spd(&mut r, d, 0.5);
     let sat = SineSat::new(d, &idx, &[1.0, 2.0]).unwrap();
     let trig = TrigAug::new(d, &idx, &[1.0, 1.0]).unwrap();
+    let x = [0.7, 9.0, -2.0];
+    assert_eq!(
+        trig.apply(&x),
+        vec![x[0].sin(), x[0].cos(), x[2].sin(), x[2].cos()]
+    );
+    assert_eq!(
+        sat.apply(&x)[1],
+        2.0 * (9.0 * x[2].sin() + (3.0 * x[2]).sin()) / 8.0
+    );
     let xs = sample_gaussian(&mut r, &m, &s, 20000);
     for (mom, fx) in [
         (
             sat.forward(&m, s.as_ref()).0,
-            Box::new(|x: &[f64]| {
-                vec![
-                    (9.0 * x[0].sin() + (3.0 * x[0]).sin()) / 8.0,
-                    2.0 * (9.0 * x[2].sin() + (3.0 * x[2]).sin()) / 8.0,
-                ]
-            }) as Box<dyn Fn(&[f64]) -> Vec<f64>>,
+            Box::new(|x: &[f64]| sat.apply(x)) as Box<dyn Fn(&[f64]) -> Vec<f64>>,
         ),
         (
             trig.forward(&m, s.as_ref()).0,
-            Box::new(|x: &[f64]| vec![x[0].sin(), x[0].cos(), x[2].sin(), x[2].cos()]),
+            Box::new(|x: &[f64]| trig.apply(x)),
         ),
     ] {
         let ys: Vec<Vec<f64>> = xs.iter().map(|x| fx(x)).collect();
@@ -197,7 +201,7 @@ fn gsat_and_gtrig_moments_agree_with_sampling() {
                     .map(|(x, y)| (x[k] - mk) * (y[a] - ma))
                     .sum::<f64>()
                     / n;
-                let want: f64 = (0..d).map(|l| s[(k, l)] * mom.c[(l, a)]).sum();
+                let want: f64 = (0..d).map(|l| s[(k, l)] * mom.v[(l, a)]).sum();
                 assert!((cxy - want).abs() < 0.03, "cross {k}{a}: {cxy} vs {want}");
             }
         }

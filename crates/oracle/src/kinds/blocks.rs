@@ -101,13 +101,13 @@ pub(crate) fn check_moment_block(
         &mut out,
         c_name,
         Class::Value,
-        &Tensor::from_mat(&outputs.c),
+        &Tensor::from_mat(&outputs.v),
     )?;
 
     let zero = || MomentsBar {
         mean: vec![0.0; e],
         cov: Mat::zeros(e, e),
-        c: None,
+        v: None,
     };
     let jm = jacobian(&[e], d, p, |k| {
         let mut bar = zero();
@@ -123,7 +123,7 @@ pub(crate) fn check_moment_block(
         let mut bar = zero();
         let mut c = Mat::zeros(d, e);
         c[(k / e, k % e)] = 1.0;
-        bar.c = Some(c);
+        bar.v = Some(c);
         vjp(&bar)
     });
     for (y, j) in [("M", &jm), ("S", &js), (c_name, &jc)] {

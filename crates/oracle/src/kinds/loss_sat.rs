@@ -30,7 +30,7 @@ impl KindChecker for LossSat {
             Class::CovOrDerivative,
             &Tensor::scalar(mom.var),
         )?;
-        cmp(case, &mut out, "C", Class::Value, &Tensor::from_vec(&mom.c))?;
+        cmp(case, &mut out, "C", Class::Value, &Tensor::from_vec(&mom.v))?;
 
         let vjp = |bar: CostBar| (cost.backward(&cache, &bar), Vec::new());
         let jl = jacobian(&[], d, 0, |_| {
@@ -49,7 +49,7 @@ impl KindChecker for LossSat {
             let mut c = vec![0.0; d];
             c[k] = 1.0;
             vjp(CostBar {
-                c: Some(c),
+                v: Some(c),
                 ..Default::default()
             })
         });

@@ -99,7 +99,7 @@ impl EnergyCost {
         let var = 2.0 * tr2 + 4.0 * quad;
         let c = lam_mu.iter().map(|v| 2.0 * v).collect();
         (
-            CostMoments { mean, var, c },
+            CostMoments { mean, var, v: c },
             EnergyCache {
                 mu: mu.to_vec(),
                 lam_mu,
@@ -117,7 +117,7 @@ impl EnergyCost {
         for i in 0..n {
             let lslmu: f64 = (0..n).map(|j| lsl[(i, j)] * mu[j]).sum();
             out.mean[i] = 2.0 * bar.mean * lam_mu[i] + 8.0 * bar.var * lslmu;
-            if let Some(cb) = &bar.c {
+            if let Some(cb) = &bar.v {
                 out.mean[i] += 2.0 * l[i] * cb[i];
             }
             out.cov[(i, i)] += bar.mean * l[i];

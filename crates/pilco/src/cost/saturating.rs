@@ -226,7 +226,7 @@ impl CostSum {
             }
         }
         (
-            CostMoments { mean, var, c },
+            CostMoments { mean, var, v: c },
             CostSumCache {
                 singles,
                 pairs,
@@ -244,7 +244,7 @@ impl CostSum {
         let q_bar_common = -bar.mean - 2.0 * bar.var * sum_q;
         for g in &cache.singles {
             let mut q_bar = q_bar_common;
-            if let Some(cb) = &bar.c {
+            if let Some(cb) = &bar.v {
                 // C = Σ_k E[e_k] t_k
                 let tbar: Vec<f64> = g.dims.iter().map(|&d| g.value * cb[d]).collect();
                 q_bar += g

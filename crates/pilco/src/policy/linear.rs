@@ -123,7 +123,10 @@ impl Policy for LinearPolicy {
         let mut cov = w * &swt;
         symmetrise(&mut cov);
         let c = w.transpose().to_owned();
-        Ok((Moments { mean, cov, c }, LinearCache { m: m.to_vec(), swt }))
+        Ok((
+            Moments { mean, cov, v: c },
+            LinearCache { m: m.to_vec(), swt },
+        ))
     }
 
     fn backward(&self, cache: &LinearCache, bar: &MomentsBar, p_bar: &mut [f64]) -> GaussianBar {
@@ -147,7 +150,7 @@ impl Policy for LinearPolicy {
         for j in 0..d {
             for i in 0..e {
                 let mut v = bar.mean[i] * cache.m[j] + g[(i, j)];
-                if let Some(vb) = &bar.c {
+                if let Some(vb) = &bar.v {
                     v += vb[(j, i)];
                 }
                 p_bar[e + j * e + i] += v;

@@ -47,7 +47,7 @@ pub trait Policy {
     /// `x ~ N(m, s)`, and the cache for the backward.
     fn forward(&self, m: &[f64], s: MatRef<'_, f64>) -> Result<(Moments, Self::Cache)>;
 
-    /// Vector-Jacobian product. Given the adjoints of `(M, S, V)` (`bar.c` is `V̄`), **add**
+    /// Vector-Jacobian product. Given the adjoints of `(M, S, V)` (`bar.v` is `V̄`), **add**
     /// `∂f/∂p` to `p_bar` (length P, same order as [`Policy::params`]) and return the adjoints
     /// of `(m, s)` (`s̄` symmetrised, see the crate docs).
     fn backward(&self, cache: &Self::Cache, bar: &MomentsBar, p_bar: &mut [f64]) -> GaussianBar;

@@ -103,6 +103,15 @@ impl SineSat {
         &self.scale
     }
 
+    /// The deterministic map `u(x)` (for applying a policy to a known state).
+    pub fn apply(&self, x: &[f64]) -> Vec<f64> {
+        self.idx
+            .iter()
+            .zip(&self.scale)
+            .map(|(&i, &e)| e * (9.0 * x[i].sin() + (3.0 * x[i]).sin()) / 8.0)
+            .collect()
+    }
+
     /// Exact `M`, `S`, `C` of `u` for `x ~ N(m, s)`.
     pub fn forward(&self, m: &[f64], s: MatRef<'_, f64>) -> (Moments, SinesCache) {
         assert_input("gSat", self.engine.d, m, s);
@@ -188,15 +197,13 @@ impl PartialSat {
         &self.ranges
     }
 
-    /// The deterministic map `u(x)` (for simulating a policy on a real state).
+    /// The deterministic map `u(x)` (for applying a policy to a known state).
     pub fn apply(&self, x: &[f64]) -> Vec<f64> {
-        self.sat
-            .indices()
-            .iter()
-            .zip(self.sat.scales())
-            .zip(&self.offset)
-            .map(|((&i, &h), &c)| c + h * (9.0 * x[i].sin() + (3.0 * x[i]).sin()) / 8.0)
-            .collect()
+        let mut u = self.sat.apply(x);
+        for (uj, c) in u.iter_mut().zip(&self.offset) {
+            *uj += c;
+        }
+        u
     }
 
     pub fn forward(&self, m: &[f64], s: MatRef<'_, f64>) -> (Moments, SinesCache) {

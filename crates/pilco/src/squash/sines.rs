@@ -94,7 +94,7 @@ impl Sines {
             }
         }
         symmetrise(&mut cov);
-        (Moments { mean, cov, c }, SinesCache { mu, v, h })
+        (Moments { mean, cov, v: c }, SinesCache { mu, v, h })
     }
 
     /// `E[sin w_r sin w_q]` and its partial derivatives.
@@ -129,7 +129,7 @@ impl Sines {
         // Adjoints of E[sin w_r] and E[cos w_r], of μ_r and of v_rq (lower triangle + diag).
         let mut es_bar: Vec<f64> = (0..r_n).map(|r| f[r].coef * bar.mean[f[r].out]).collect();
         let mut ec_bar = vec![0.0; r_n];
-        if let Some(cb) = &bar.c {
+        if let Some(cb) = &bar.v {
             for r in 0..r_n {
                 ec_bar[r] = f[r].coef * f[r].k * cb[(f[r].idx, f[r].out)];
             }

@@ -65,6 +65,17 @@ impl TrigAug {
         &self.idx
     }
 
+    /// The deterministic map `x → [e_j sin x_{i_j}, e_j cos x_{i_j}]_j`.
+    pub fn apply(&self, x: &[f64]) -> Vec<f64> {
+        let mut y = Vec::with_capacity(2 * self.idx.len());
+        for (j, &i) in self.idx.iter().enumerate() {
+            let e = self.engine.feats[2 * j].coef;
+            y.push(e * x[i].sin());
+            y.push(e * x[i].cos());
+        }
+        y
+    }
+
     pub fn forward(&self, m: &[f64], s: MatRef<'_, f64>) -> (Moments, SinesCache) {
         assert_input("gTrig", self.engine.d, m, s);
         self.engine.forward(m, s)

@@ -66,7 +66,7 @@ pub fn unflat(v: &[f64], r: usize, c: usize) -> Mat<f64> {
 pub fn flat_moments(o: &Moments) -> Vec<f64> {
     let mut v = o.mean.clone();
     v.extend(flat(&o.cov));
-    v.extend(flat(&o.c));
+    v.extend(flat(&o.v));
     v
 }
 
@@ -75,7 +75,7 @@ pub fn moments_bar(ybar: &[f64], e: usize, d: usize) -> MomentsBar {
     MomentsBar {
         mean: ybar[..e].to_vec(),
         cov: unflat(&ybar[e..e + e * e], e, e),
-        c: Some(unflat(&ybar[e + e * e..], d, e)),
+        v: Some(unflat(&ybar[e + e * e..], d, e)),
     }
 }
 
