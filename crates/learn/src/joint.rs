@@ -44,8 +44,8 @@ impl Joint {
     /// the new variables.
     pub fn append(&mut self, idx: &[usize], out: &Moments) -> Vec<usize> {
         let (n, k) = (self.dim(), out.mean.len());
-        debug_assert_eq!(out.c.nrows(), idx.len());
-        debug_assert_eq!(out.c.ncols(), k);
+        debug_assert_eq!(out.v.nrows(), idx.len());
+        debug_assert_eq!(out.v.ncols(), k);
         let mut cov = Mat::zeros(n + k, n + k);
         for j in 0..n {
             for i in 0..n {
@@ -57,7 +57,7 @@ impl Joint {
                 let v: f64 = idx
                     .iter()
                     .enumerate()
-                    .map(|(a, &ia)| self.cov[(i, ia)] * out.c[(a, c)])
+                    .map(|(a, &ia)| self.cov[(i, ia)] * out.v[(a, c)])
                     .sum();
                 cov[(i, n + c)] = v;
                 cov[(n + c, i)] = v;
@@ -79,7 +79,7 @@ impl Joint {
         let out = Moments {
             mean: values.to_vec(),
             cov: Mat::zeros(k, k),
-            c: Mat::zeros(0, k),
+            v: Mat::zeros(0, k),
         };
         self.append(&[], &out)
     }
@@ -144,7 +144,7 @@ impl JointBar {
         MomentsBar {
             mean: mean_bar,
             cov: cov_bar,
-            c: Some(c_bar),
+            v: Some(c_bar),
         }
     }
 

@@ -229,7 +229,7 @@ pub struct StepOut<C> {
 }
 
 fn store_c(mo: &Moments) -> Mat<f64> {
-    mo.c.clone()
+    mo.v.clone()
 }
 
 impl<P: Policy> Predictor<'_, P> {
@@ -263,12 +263,7 @@ impl<P: Policy> Predictor<'_, P> {
         };
         let gp_idx: Vec<usize> = self.spec.dyn_inputs.iter().chain(&u_idx).copied().collect();
         let (gm, gs) = joint.marginal(&gp_idx);
-        let (gmo, gcache) = moments::forward(&self.dynamics, &gm, gs.as_ref())?;
-        let gp_out = Moments {
-            mean: gmo.mean,
-            cov: gmo.cov,
-            c: gmo.v,
-        };
+        let (gp_out, gcache) = moments::forward(&self.dynamics, &gm, gs.as_ref())?;
         let y_idx = joint.append(&gp_idx, &gp_out);
 
         let rel = |k: usize| self.spec.targets[k] == Target::Relative;
@@ -310,7 +305,7 @@ impl<P: Policy> Predictor<'_, P> {
                 squash,
                 u_idx,
                 gp_idx,
-                gp: (gp_out.c, gcache),
+                gp: (gp_out.v.clone(), gcache),
                 y_idx,
             },
         })
@@ -361,7 +356,7 @@ impl<P: Policy> Predictor<'_, P> {
         // Dynamics GP.
         let mb = zbar.pop_append(&tape.joint, &tape.gp_idx, tape.gp.0.as_ref());
         let cov_bar = mb.cov;
-        let v_bar = mb.c.expect("pop_append returns C̄");
+        let v_bar = mb.v.expect("pop_append returns C̄");
         let ia = moments::backward(
             &self.dynamics,
             &tape.gp.1,

@@ -151,7 +151,7 @@ where
                 &CostBar {
                     mean: disc * spec.w_mean,
                     var: disc * var_bar,
-                    c: None,
+                    v: None,
                 },
             );
             for k in 0..d0 {
@@ -167,7 +167,7 @@ where
                 &CostBar {
                     mean: disc * w3,
                     var: 0.0,
-                    c: None,
+                    v: None,
                 },
             )),
             _ => None,

@@ -128,21 +128,13 @@ impl Policy for RbfPolicy {
     }
 
     fn forward(&self, m: &[f64], s: MatRef<'_, f64>) -> Result<(Moments, Self::Cache)> {
-        let (mo, cache) = forward(&MmModel::mean_only(&self.gp), m, s)?;
-        Ok((
-            Moments {
-                mean: mo.mean,
-                cov: mo.cov,
-                c: mo.v,
-            },
-            cache,
-        ))
+        Ok(forward(&MmModel::mean_only(&self.gp), m, s)?)
     }
 
     fn backward(&self, cache: &Self::Cache, bar: &MomentsBar, p_bar: &mut [f64]) -> GaussianBar {
         let (n, d, e) = (self.gp.n(), self.gp.input_dim(), self.gp.output_dim());
         let zero_v = Mat::zeros(d, e);
-        let v = bar.c.as_ref().unwrap_or(&zero_v);
+        let v = bar.v.as_ref().unwrap_or(&zero_v);
         let ia = backward(
             &MmModel::mean_only(&self.gp),
             cache,
