@@ -69,9 +69,11 @@ impl Plant {
     }
 
     /// The latch after a step that ended in state `s`.
+    #[inline]
     pub fn next_latch(&self, s: &State, latch: bool) -> bool {
-        let p = self.tcp(s);
-        contact::in_hole(&self.geometry, latch, p.x[0], p.x[1])
+        let q = [s[0], s[1], s[2]];
+        let x = fk(self.model.lengths(), &q, &Trig::new(&q));
+        contact::in_hole(&self.geometry, latch, x[0], x[1])
     }
 
     /// ṡ = (q̇, M⁻¹(τ − C q̇ − F_v q̇ − Jᵀ W_ext)). Contact switches live here.
