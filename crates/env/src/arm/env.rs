@@ -1,0 +1,268 @@
+//! The arm as an [`Environment`]: VIL (a = (k_x, k_y)) or VILTA (a = (k_x, k_y, Δx_ref,
+//! Δy_ref)), observation s = (x, y, ẋ, ẏ, f_x, f_y) from the noisy readings.
+
+use super::kinematics::ik;
+use super::params::{ActionMode, ArmConfig};
+use super::plan::RefPoint;
+use super::sensors::Reading;
+use super::sim::{ArmSim, TickStatus};
+use super::trace::TickRecord;
+use super::{impedance, mat3::V3};
+use crate::{EnvError, Environment, Step, StepInfo};
+use std::collections::BTreeMap;
+
+/// Names of the observed state entries.
+pub const STATE_NAMES: [&str; 6] = ["x", "y", "xd", "yd", "fx", "fy"];
+
+/// The planar arm peg-in-hole environment.
+#[derive(Debug)]
+pub struct ArmEnv {
+    cfg: ArmConfig,
+    sim: Option<ArmSim>,
+    steps: usize,
+    done: bool,
+    /// VILTA: the integrated reference (x_v, y_v, φ_v) and its current velocity.
+    vilta_x: V3,
+    vilta_xd: V3,
+}
+
+impl ArmEnv {
+    /// A new environment; validates `cfg`. Call [`Environment::reset`] before stepping.
+    pub fn new(cfg: ArmConfig) -> Result<ArmEnv, EnvError> {
+        cfg.validate()?;
+        Ok(ArmEnv {
+            cfg,
+            sim: None,
+            steps: 0,
+            done: false,
+            vilta_x: [0.0; 3],
+            vilta_xd: [0.0; 3],
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &ArmConfig {
+        &self.cfg
+    }
+
+    /// The running simulator (after `reset`).
+    pub fn sim(&self) -> Option<&ArmSim> {
+        self.sim.as_ref()
+    }
+
+    /// The per-tick trace of the current episode (empty unless `record_trace`).
+    pub fn trace(&self) -> &[TickRecord] {
+        self.sim.as_ref().map(|s| s.trace()).unwrap_or(&[])
+    }
+
+    /// Moves the per-tick trace out.
+    pub fn take_trace(&mut self) -> Vec<TickRecord> {
+        self.sim
+            .as_mut()
+            .map(|s| s.take_trace())
+            .unwrap_or_default()
+    }
+
+    /// Whether the TCP is inserted now: in the hole and within `insert_tolerance` of the end
+    /// wall (true state).
+    pub fn inserted(&self) -> bool {
+        self.sim.as_ref().is_some_and(|s| {
+            let x = s.plant().tcp(s.state()).x[0];
+            s.in_hole() && x >= self.cfg.geometry.end_x() - self.cfg.insert_tolerance
+        })
+    }
+
+    fn stiffness_names(&self) -> [&'static str; 4] {
+        ["k_x", "k_y", "dx_ref", "dy_ref"]
+    }
+
+    /// Checks an action; never clips.
+    fn check_action(&self, a: &[f64]) -> Result<(), EnvError> {
+        if a.len() != self.action_dim() {
+            return Err(EnvError::Dimension {
+                what: "action",
+                got: a.len(),
+                expected: self.action_dim(),
+            });
+        }
+        let names = self.stiffness_names();
+        for i in 0..2 {
+            if !(a[i].is_finite() && a[i] > 0.0) {
+                return Err(EnvError::InvalidAction {
+                    kind: "stiffness",
+                    field: names[i].into(),
+                    value: a[i],
+                    requirement: "> 0 and finite".into(),
+                });
+            }
+        }
+        if let ActionMode::Vilta { delta_max, .. } = self.cfg.mode {
+            for i in 2..4 {
+                if !(a[i].is_finite() && a[i].abs() <= delta_max) {
+                    return Err(EnvError::InvalidAction {
+                        kind: "reference increment",
+                        field: names[i].into(),
+                        value: a[i],
+                        requirement: format!("within ±{delta_max} m per tick"),
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn observation(&self, r: &Reading) -> Vec<f64> {
+        let sim = self.sim.as_ref().expect("called after reset");
+        let est = impedance::task_state(sim.model(), &r.q, &r.qd);
+        vec![est.x[0], est.x[1], est.xd[0], est.xd[1], r.f[0], r.f[1]]
+    }
+
+    fn reference_at(&self, t: f64) -> RefPoint {
+        match self.cfg.mode {
+            ActionMode::Vil => self.cfg.reference.eval(t),
+            ActionMode::Vilta { .. } => RefPoint {
+                x: self.vilta_x,
+                xd: self.vilta_xd,
+                xdd: [0.0; 3],
+            },
+        }
+    }
+}
+
+impl Environment for ArmEnv {
+    fn state_dim(&self) -> usize {
+        6
+    }
+    fn action_dim(&self) -> usize {
+        match self.cfg.mode {
+            ActionMode::Vil => 2,
+            ActionMode::Vilta { .. } => 4,
+        }
+    }
+    fn dt(&self) -> f64 {
+        self.cfg.step_dt
+    }
+    fn horizon(&self) -> usize {
+        self.cfg.horizon
+    }
+    fn state_names(&self) -> Vec<String> {
+        STATE_NAMES.iter().map(|s| s.to_string()).collect()
+    }
+    fn action_names(&self) -> Vec<String> {
+        self.stiffness_names()[..self.action_dim()]
+            .iter()
+            .map(|s| s.to_string())
+            .collect()
+    }
+
+    /// Places the TCP at (start[0], start[1]) with φ = 0 by inverse kinematics (elbow q2 > 0),
+    /// at rest. The other start entries (velocities, forces) must be finite and are ignored:
+    /// the arm always starts at rest and contact forces follow from the pose.
+    fn reset(&mut self, start: &[f64], seed: u64) -> Result<Vec<f64>, EnvError> {
+        if start.len() != self.state_dim() {
+            return Err(EnvError::Dimension {
+                what: "start state",
+                got: start.len(),
+                expected: self.state_dim(),
+            });
+        }
+        for (i, v) in start.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(EnvError::NonFiniteStart {
+                    field: STATE_NAMES[i].into(),
+                    value: *v,
+                });
+            }
+        }
+        let l = self.cfg.arm.length;
+        let min_sin_q2 = self.cfg.singular_det / (l[0] * l[1]);
+        let pose = [start[0], start[1], 0.0];
+        let q0 = ik(&l, &pose, min_sin_q2).map_err(|reason| EnvError::OutOfReach {
+            x: start[0],
+            y: start[1],
+            reason,
+        })?;
+        let sim = ArmSim::new(&self.cfg, q0, seed)?;
+        let r = *sim.reading();
+        self.sim = Some(sim);
+        self.steps = 0;
+        self.done = false;
+        self.vilta_x = pose;
+        self.vilta_xd = [0.0; 3];
+        Ok(self.observation(&r))
+    }
+
+    fn step(&mut self, action: &[f64]) -> Result<Step, EnvError> {
+        let Some(sim) = self.sim.as_ref() else {
+            return Err(EnvError::NotReset);
+        };
+        if self.done {
+            return Err(EnvError::EpisodeOver { t: sim.t() });
+        }
+        self.check_action(action)?;
+        let k = [action[0], action[1]];
+        if let ActionMode::Vilta { delta_tick, .. } = self.cfg.mode {
+            self.vilta_xd = [action[2] / delta_tick, action[3] / delta_tick, 0.0];
+        }
+        let ticks = self.cfg.ticks_per_step();
+        let mut singular = false;
+        let mut max_f: f64 = 0.0;
+        for _ in 0..ticks {
+            let sim = self.sim.as_ref().expect("checked above");
+            let t = sim.t();
+            let dt = sim.tick_dt();
+            let refp = self.reference_at(t);
+            let sim = self.sim.as_mut().expect("checked above");
+            match sim.tick(k, &refp)? {
+                TickStatus::Ok => {}
+                TickStatus::Singular => {
+                    singular = true;
+                    break;
+                }
+            }
+            let w = sim.contact().w;
+            max_f = max_f.max(w[0].hypot(w[1]));
+            if let ActionMode::Vilta { .. } = self.cfg.mode {
+                for i in 0..2 {
+                    self.vilta_x[i] += self.vilta_xd[i] * dt;
+                }
+            }
+        }
+        self.steps += 1;
+        self.done = singular || self.steps >= self.cfg.horizon;
+        let sim = self.sim.as_ref().expect("checked above");
+        let r = *sim.reading();
+        let t = sim.t();
+        let tcp = sim.plant().tcp(sim.state());
+        let c = sim.contact();
+        let refp = self.reference_at(t);
+        let s = sim.state();
+        let mut flags = BTreeMap::new();
+        flags.insert("contact".to_string(), c.any());
+        flags.insert("face".to_string(), c.face);
+        flags.insert("end_wall".to_string(), c.end);
+        flags.insert("side_wall".to_string(), c.side);
+        flags.insert("spring".to_string(), c.spring);
+        flags.insert("in_hole".to_string(), sim.in_hole());
+        flags.insert("singular".to_string(), singular);
+        flags.insert("inserted".to_string(), self.inserted());
+        let mut values = BTreeMap::new();
+        for i in 0..3 {
+            values.insert(format!("q{}", i + 1), s[i]);
+            values.insert(format!("qd{}", i + 1), s[3 + i]);
+        }
+        values.insert("phi".to_string(), tcp.x[2]);
+        values.insert("max_abs_f".to_string(), max_f);
+        Ok(Step {
+            observation: self.observation(&r),
+            info: StepInfo {
+                t,
+                true_state: vec![tcp.x[0], tcp.x[1], tcp.xd[0], tcp.xd[1], c.w[0], c.w[1]],
+                reference: Some(vec![refp.x[0], refp.x[1], refp.xd[0], refp.xd[1]]),
+                flags,
+                values,
+            },
+            done: self.done,
+        })
+    }
+}

@@ -1,0 +1,69 @@
+//! The interface between the learning loop and a system it learns on.
+
+use crate::EnvError;
+use std::collections::BTreeMap;
+
+/// A system the PILCO learning loop interacts with, one learning step (`dt()` seconds) at a time.
+///
+/// The trait is object-safe (`Box<dyn Environment>` works) so a simulator and a real robot
+/// driven from outside can be swapped at run time.
+///
+/// Contract:
+/// * [`reset`](Environment::reset) must be called before the first [`step`](Environment::step)
+///   and after an episode is over (`Step::done`); otherwise `step` returns an error.
+/// * Randomness is injected, never drawn from a global source: the caller draws the start
+///   state from its start distribution and passes a `seed` for this episode's sensor noise,
+///   so episode `k` can be reproduced from `(master seed, k)` alone.
+/// * Bad input (wrong length, non-finite or out-of-range values) is an [`EnvError`] naming
+///   the offending field, never a panic and never silently clipped.
+pub trait Environment {
+    /// Length of the observed state `s` returned by `reset` and `step`.
+    fn state_dim(&self) -> usize;
+    /// Length of the action `a` passed to `step`.
+    fn action_dim(&self) -> usize;
+    /// Seconds of system time per learning step.
+    fn dt(&self) -> f64;
+    /// Number of learning steps in one episode (the horizon H); `step` number `H` sets `done`.
+    fn horizon(&self) -> usize;
+    /// Names of the state entries, in order (for files, plots and logs).
+    fn state_names(&self) -> Vec<String>;
+    /// Names of the action entries, in order.
+    fn action_names(&self) -> Vec<String>;
+    /// Starts an episode at `start` (a state of length `state_dim`, drawn by the caller from its
+    /// start distribution) with sensor noise seeded by `seed`. Returns the first (noisy)
+    /// observation, which may differ from `start` (noise; entries a system cannot set, such as
+    /// contact forces).
+    fn reset(&mut self, start: &[f64], seed: u64) -> Result<Vec<f64>, EnvError>;
+    /// Applies `action` for `dt()` seconds and returns the observation at the end of the step.
+    fn step(&mut self, action: &[f64]) -> Result<Step, EnvError>;
+}
+
+/// What one learning step returns.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Step {
+    /// The measured state at the end of the step (length `state_dim`), what the learner sees.
+    pub observation: Vec<f64>,
+    /// Diagnostics the learner must not use as observations.
+    pub info: StepInfo,
+    /// True when the episode is over: the horizon is reached, or the system stopped it (see
+    /// `info.flags`, e.g. `singular`). Call `reset` before stepping again.
+    pub done: bool,
+}
+
+/// Diagnostics of one step. Simulators fill in the true state; a real robot may leave it equal
+/// to the observation.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StepInfo {
+    /// System time at the end of the step, seconds since reset.
+    pub t: f64,
+    /// The noise-free state at the end of the step, same layout as the observation.
+    pub true_state: Vec<f64>,
+    /// The commanded reference at the end of the step, same layout as the first
+    /// `reference.len()` state entries (for the arm: `x_v, y_v, ẋ_v, ẏ_v`); the learner may use
+    /// it as the GP prior mean. `None` when the system has no reference.
+    pub reference: Option<Vec<f64>>,
+    /// Boolean events at the end of the step (for the arm: `contact`, `in_hole`, `singular`, …).
+    pub flags: BTreeMap<String, bool>,
+    /// Other named scalars (for the arm: joint angles, largest force during the step, …).
+    pub values: BTreeMap<String, f64>,
+}

@@ -1,0 +1,208 @@
+//! Check (k), library part: every kind of bad input of issue 5 row 9 is an error naming the
+//! field (or the time, for divergence), never a panic and never silently clipped.
+
+use vicpilco_env::arm::{ActionMode, ArmConfig, ArmEnv, ControllerKind, ReferenceSpec};
+use vicpilco_env::{EnvError, Environment};
+
+const START: [f64; 6] = [0.5, 0.0, 0.0, 0.0, 0.0, 0.0];
+
+fn env(cfg: ArmConfig) -> ArmEnv {
+    let mut e = ArmEnv::new(cfg).unwrap();
+    e.reset(&START, 1).unwrap();
+    e
+}
+
+#[test]
+fn stiffness_not_positive() {
+    let mut e = env(ArmConfig::default());
+    let err = e.step(&[-3.0, 100.0]).unwrap_err();
+    assert_eq!(err.to_string(), "stiffness k_x = -3 must be > 0 and finite");
+    let err = e.step(&[100.0, 0.0]).unwrap_err();
+    assert!(
+        err.to_string().starts_with("stiffness k_y = 0 must be > 0"),
+        "{err}"
+    );
+    // The rejected actions did not advance the episode.
+    assert_eq!(e.sim().unwrap().t(), 0.0);
+}
+
+#[test]
+fn stiffness_not_finite() {
+    let mut e = env(ArmConfig::default());
+    for bad in [f64::NAN, f64::INFINITY] {
+        let err = e.step(&[bad, 100.0]).unwrap_err();
+        assert!(
+            matches!(err, EnvError::InvalidAction { ref field, .. } if field == "k_x"),
+            "{err}"
+        );
+    }
+}
+
+#[test]
+fn reference_increment_above_limit() {
+    let mut e = env(ArmConfig {
+        mode: ActionMode::vilta(),
+        ..ArmConfig::default()
+    });
+    assert!(e.step(&[100.0, 100.0, 0.0025, -0.0025]).is_ok());
+    let err = e.step(&[100.0, 100.0, 0.0, -0.003]).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "reference increment dy_ref = -0.003 must be within ±0.0025 m per tick"
+    );
+}
+
+#[test]
+fn wrong_action_length() {
+    let mut e = env(ArmConfig::default());
+    let err = e.step(&[100.0, 100.0, 0.0]).unwrap_err();
+    assert_eq!(
+        err,
+        EnvError::Dimension {
+            what: "action",
+            got: 3,
+            expected: 2
+        }
+    );
+}
+
+#[test]
+fn start_out_of_reach() {
+    let mut e = ArmEnv::new(ArmConfig::default()).unwrap();
+    let err = e.reset(&[1.5, 0.0, 0.0, 0.0, 0.0, 0.0], 1).unwrap_err();
+    assert!(
+        matches!(err, EnvError::OutOfReach { x, .. } if x == 1.5),
+        "{err}"
+    );
+    assert!(err.to_string().contains("out of reach"), "{err}");
+    // Folded onto the base: singular.
+    let err = e.reset(&[0.4, 0.0, 0.0, 0.0, 0.0, 0.0], 1).unwrap_err();
+    assert!(err.to_string().contains("singular"), "{err}");
+    let err = e
+        .reset(&[0.5, f64::NAN, 0.0, 0.0, 0.0, 0.0], 1)
+        .unwrap_err();
+    assert!(err.to_string().contains("start state y"), "{err}");
+    let err = e.reset(&[0.5, 0.0], 1).unwrap_err();
+    assert!(matches!(
+        err,
+        EnvError::Dimension {
+            got: 2,
+            expected: 6,
+            ..
+        }
+    ));
+    // Not reset yet: stepping is an error, not a panic.
+    assert_eq!(e.step(&[100.0, 100.0]).unwrap_err(), EnvError::NotReset);
+}
+
+#[test]
+fn divergence_reports_time() {
+    // A stiffness far beyond what a 1 kHz loop can hold makes the closed loop unstable.
+    for k in [1e9, f64::MAX] {
+        let mut e = env(ArmConfig::default());
+        let err = (0..100)
+            .find_map(|_| e.step(&[k, k]).err())
+            .expect("must diverge");
+        match &err {
+            EnvError::Diverged { t, detail } => {
+                eprintln!("(k) k = {k:e}: {err}");
+                assert!(*t > 0.0 && *t < 10.0 && !detail.is_empty());
+            }
+            other => panic!("expected divergence, got {other}"),
+        }
+        assert!(err.to_string().starts_with("simulation diverged at t = "));
+    }
+}
+
+#[test]
+fn episode_over() {
+    let mut e = ArmEnv::new(ArmConfig {
+        horizon: 2,
+        ..ArmConfig::default()
+    })
+    .unwrap();
+    e.reset(&START, 1).unwrap();
+    assert!(!e.step(&[100.0, 100.0]).unwrap().done);
+    assert!(e.step(&[100.0, 100.0]).unwrap().done);
+    assert!(matches!(
+        e.step(&[100.0, 100.0]).unwrap_err(),
+        EnvError::EpisodeOver { .. }
+    ));
+    e.reset(&START, 1).unwrap();
+    assert!(e.step(&[100.0, 100.0]).is_ok());
+}
+
+#[test]
+fn config_negative_mass() {
+    let mut cfg = ArmConfig::default();
+    cfg.arm.mass[1] = -1.0;
+    let err = ArmEnv::new(cfg).unwrap_err();
+    assert_eq!(err.to_string(), "config arm.mass[1] = -1 must be > 0");
+    let mut cfg = ArmConfig::default();
+    cfg.impedance.mass[2] = 0.0;
+    assert!(ArmEnv::new(cfg)
+        .unwrap_err()
+        .to_string()
+        .contains("impedance.mass[2]"));
+    let cfg = ArmConfig {
+        mismatch: -1.15,
+        ..ArmConfig::default()
+    };
+    assert!(ArmEnv::new(cfg)
+        .unwrap_err()
+        .to_string()
+        .contains("mismatch"));
+}
+
+#[test]
+fn config_step_longer_than_control_period() {
+    let cfg = ArmConfig {
+        h: 2e-3,
+        ..ArmConfig::default()
+    };
+    let err = ArmEnv::new(cfg).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "config h = 0.002 must be ≤ 1/control_hz = 0.001"
+    );
+    let cfg = ArmConfig {
+        control_hz: 333.0,
+        ..ArmConfig::default()
+    };
+    assert!(ArmEnv::new(cfg)
+        .unwrap_err()
+        .to_string()
+        .contains("step_dt"));
+    let cfg = ArmConfig {
+        reference: ReferenceSpec::Ramp {
+            from: [0.5, 0.0, 0.0],
+            to: [0.6, 0.0, 0.0],
+            t0: 1.0,
+            t1: 1.0,
+        },
+        ..ArmConfig::default()
+    };
+    assert!(ArmEnv::new(cfg)
+        .unwrap_err()
+        .to_string()
+        .contains("reference.t1"));
+}
+
+#[test]
+fn unknown_controller() {
+    let err = "pid".parse::<ControllerKind>().unwrap_err();
+    assert_eq!(err, EnvError::UnknownController("pid".into()));
+    assert_eq!(
+        err.to_string(),
+        "unknown controller \"pid\": expected one of gic, sic, off"
+    );
+    assert_eq!(
+        "GIC".parse::<ControllerKind>().unwrap(),
+        ControllerKind::Gic
+    );
+    // Through a serialized configuration too.
+    let mut json = serde_json::to_value(ArmConfig::default()).unwrap();
+    json["controller"] = "pid".into();
+    let parsed: Result<ArmConfig, _> = serde_json::from_value(json);
+    assert!(parsed.unwrap_err().to_string().contains("pid"));
+}
