@@ -14,7 +14,11 @@ pub mod kernel;
 pub mod linalg;
 mod model;
 pub mod moments;
+pub mod train;
 
 pub use error::{GpError, Result};
 pub use kernel::{Hyper, Kernel, SquaredExponential};
 pub use model::{validate_data, GpDataAdjoint, GpModel};
+pub use train::{
+    nlml, nlml_curb, train, HypCurb, NlmlEval, OutputReport, Termination, TrainOptions, TrainReport,
+};
