@@ -15,7 +15,13 @@ pub mod kernel;
 pub mod linalg;
 mod model;
 pub mod moments;
+pub mod sparse;
+pub mod train;
 
 pub use error::{GpError, Result};
 pub use kernel::{Hyper, Kernel, SquaredExponential};
 pub use model::{validate_data, GpDataAdjoint, GpModel};
+pub use sparse::{DynamicsModel, DynamicsOptions, DynamicsReport, SparseGpModel};
+pub use train::{
+    nlml, nlml_curb, train, HypCurb, NlmlEval, OutputReport, Termination, TrainOptions, TrainReport,
+};

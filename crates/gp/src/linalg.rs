@@ -3,7 +3,8 @@
 
 use crate::error::{GpError, Result};
 use faer::linalg::solvers::{DenseSolveCore, Solve};
-use faer::{Mat, MatRef, Side};
+use faer::prelude::ReborrowMut;
+use faer::{Mat, MatMut, MatRef, Par, Side};
 
 /// A Cholesky factor `A = L Lᵀ` of a symmetric positive-definite matrix, with the jitter that
 /// had to be added to its diagonal to make the factorisation succeed (0 when none).
@@ -109,6 +110,150 @@ impl Chol {
     pub fn inverse(&self) -> Mat<f64> {
         self.llt.inverse()
     }
+
+    /// `B ← L⁻¹ B` (forward substitution with the lower factor), in place.
+    pub fn solve_l_in_place(&self, b: MatMut<'_, f64>) {
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(self.llt.L(), b, Par::Seq);
+    }
+
+    /// `B ← L⁻ᵀ B` (back substitution with the transposed factor), in place.
+    pub fn solve_lt_in_place(&self, b: MatMut<'_, f64>) {
+        faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+            self.llt.L().transpose(),
+            b,
+            Par::Seq,
+        );
+    }
+}
+
+/// Reusable buffers for factorising and inverting one n×n symmetric positive-definite matrix
+/// over and over (the inner loop of GP training): after construction nothing is allocated, so
+/// repeated evaluations do not pay page faults on fresh n×n buffers (measured ≈ 0.5 ms per
+/// evaluation at n = 300).
+pub struct SpdWorkspace {
+    /// Lower triangle: the Cholesky factor L (upper triangle: scratch).
+    l: Mat<f64>,
+    /// L⁻¹ (lower triangle).
+    l_inv: Mat<f64>,
+    mem: faer::dyn_stack::MemBuffer,
+    jitter: f64,
+}
+
+impl SpdWorkspace {
+    pub fn new(n: usize) -> Self {
+        let req = faer::linalg::cholesky::llt::factor::cholesky_in_place_scratch::<f64>(
+            n,
+            Par::Seq,
+            Default::default(),
+        );
+        Self {
+            l: Mat::zeros(n, n),
+            l_inv: Mat::zeros(n, n),
+            mem: faer::dyn_stack::MemBuffer::new(req),
+            jitter: 0.0,
+        }
+    }
+
+    pub fn dim(&self) -> usize {
+        self.l.nrows()
+    }
+
+    /// Factorise `a` (only its lower triangle is read), adding growing diagonal jitter as
+    /// [`Chol::with_jitter`] does when it is not numerically positive definite. Returns the
+    /// jitter used (0 when none); it is also logged.
+    pub fn factor(&mut self, a: MatRef<'_, f64>, what: &str, policy: JitterPolicy) -> Result<f64> {
+        use faer::linalg::cholesky::llt::factor::cholesky_in_place;
+        let n = self.dim();
+        assert_eq!((a.nrows(), a.ncols()), (n, n), "SpdWorkspace::factor: size");
+        let mut jitter = 0.0;
+        let mean_diag = (0..n).map(|i| a[(i, i)].abs()).sum::<f64>() / n.max(1) as f64;
+        let mut next = policy.first_relative * mean_diag.max(f64::MIN_POSITIVE);
+        let mut last_pivot = 0;
+        for attempt in 0..=policy.max_tries {
+            self.l.as_mut().copy_from_triangular_lower(a);
+            if attempt > 0 {
+                jitter = next;
+                next *= policy.growth;
+                for i in 0..n {
+                    self.l[(i, i)] += jitter;
+                }
+            }
+            let stack = faer::dyn_stack::MemStack::new(&mut self.mem);
+            match cholesky_in_place(
+                self.l.as_mut(),
+                Default::default(),
+                Par::Seq,
+                stack,
+                Default::default(),
+            ) {
+                Ok(_) => {
+                    if jitter > 0.0 {
+                        tracing::warn!(what, jitter, "Cholesky needed diagonal jitter");
+                    }
+                    self.jitter = jitter;
+                    return Ok(jitter);
+                }
+                Err(e) => last_pivot = pivot_of(&e),
+            }
+        }
+        Err(GpError::NotPositiveDefinite {
+            what: what.to_string(),
+            pivot: last_pivot,
+            jitter,
+        })
+    }
+
+    /// Jitter of the last successful [`factor`](Self::factor).
+    pub fn jitter(&self) -> f64 {
+        self.jitter
+    }
+
+    /// `log |A|` of the last factorised matrix (jitter included).
+    pub fn log_det(&self) -> f64 {
+        2.0 * (0..self.dim()).map(|i| self.l[(i, i)].ln()).sum::<f64>()
+    }
+
+    /// `A⁻¹ b`.
+    pub fn solve_vec(&self, b: &[f64]) -> Vec<f64> {
+        let n = self.dim();
+        let mut x = Mat::from_fn(n, 1, |i, _| b[i]);
+        let l = self.l.as_ref();
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(l, x.as_mut(), Par::Seq);
+        faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+            l.transpose(),
+            x.as_mut(),
+            Par::Seq,
+        );
+        x.col_as_slice(0).to_vec()
+    }
+
+    /// Write `A⁻¹` (full, symmetric) into `out` (n×n).
+    pub fn inverse_into(&mut self, mut out: MatMut<'_, f64>) {
+        use faer::linalg::matmul::triangular::{matmul, BlockStructure};
+        faer::linalg::triangular_inverse::invert_lower_triangular(
+            self.l_inv.as_mut(),
+            self.l.as_ref(),
+            Par::Seq,
+        );
+        let li = self.l_inv.as_ref();
+        matmul(
+            out.rb_mut(),
+            BlockStructure::TriangularLower,
+            faer::Accum::Replace,
+            li.transpose(),
+            BlockStructure::TriangularUpper,
+            li,
+            BlockStructure::TriangularLower,
+            1.0,
+            Par::Seq,
+        );
+        let n = self.dim();
+        for j in 0..n {
+            for i in 0..j {
+                out[(i, j)] = out[(j, i)];
+            }
+        }
+    }
 }
 
 fn pivot_of(e: &faer::linalg::cholesky::llt::factor::LltError) -> usize {
@@ -164,6 +309,42 @@ mod tests {
         let a = Mat::<f64>::from_fn(2, 2, |i, j| if i == j { -1.0 } else { 0.0 });
         let err = Chol::with_jitter(a.as_ref(), "K_test", JitterPolicy::default()).unwrap_err();
         assert!(err.to_string().contains("K_test"), "{err}");
+    }
+
+    #[test]
+    fn workspace_matches_chol_and_reuses_its_buffers() {
+        let a = Mat::<f64>::from_fn(4, 4, |i, j| if i == j { 3.0 + i as f64 } else { 0.4 });
+        let c = Chol::new(a.as_ref(), "a").unwrap();
+        let mut w = SpdWorkspace::new(4);
+        for _ in 0..2 {
+            assert_eq!(
+                w.factor(a.as_ref(), "a", JitterPolicy::default()).unwrap(),
+                0.0
+            );
+            assert!((w.log_det() - c.log_det()).abs() < 1e-14);
+            let mut inv = Mat::zeros(4, 4);
+            w.inverse_into(inv.as_mut());
+            let want = c.inverse();
+            for i in 0..4 {
+                for j in 0..4 {
+                    assert!((inv[(i, j)] - want[(i, j)]).abs() < 1e-14);
+                }
+            }
+            let b = [1.0, -2.0, 0.5, 3.0];
+            let (x, y) = (w.solve_vec(&b), c.solve_vec(&b));
+            assert!(x.iter().zip(&y).all(|(p, q)| (p - q).abs() < 1e-14));
+        }
+        let ones = Mat::<f64>::from_fn(4, 4, |_, _| 1.0);
+        assert!(
+            w.factor(ones.as_ref(), "ones", JitterPolicy::default())
+                .unwrap()
+                > 0.0
+        );
+        let neg = Mat::<f64>::from_fn(4, 4, |i, j| if i == j { -1.0 } else { 0.0 });
+        let err = w
+            .factor(neg.as_ref(), "K_neg", JitterPolicy::default())
+            .unwrap_err();
+        assert!(err.to_string().contains("K_neg"), "{err}");
     }
 
     #[test]

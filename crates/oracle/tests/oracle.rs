@@ -86,6 +86,46 @@ fn gp0_matches_pilco() {
 }
 
 #[test]
+fn gp1_matches_pilco() {
+    check_kind(
+        "gp1",
+        &[
+            "D", "E", "N", "inputs", "targets", "hyp", "m", "s", "M_induce", "induce",
+        ],
+    );
+}
+
+#[test]
+fn nlml_matches_pilco() {
+    check_kind(
+        "nlml",
+        &[
+            "D",
+            "N",
+            "inputs",
+            "targets",
+            "hyp",
+            "curb_power",
+            "curb_ls",
+            "curb_snr",
+            "curb_std",
+        ],
+    );
+}
+
+#[test]
+fn every_kind_in_the_directory_has_a_checker() {
+    let Some(dir) = oracle_dir() else { return };
+    let reports = vicpilco_oracle::check_dir(&dir).expect("oracle directory readable");
+    let skipped: Vec<&String> = reports
+        .iter()
+        .filter(|(_, r)| r.skipped)
+        .map(|(k, _)| k)
+        .collect();
+    assert!(skipped.is_empty(), "kinds without a checker: {skipped:?}");
+}
+
+#[test]
 fn gp2_matches_pilco() {
     check_kind("gp2", GP_INPUTS);
 }

@@ -102,11 +102,13 @@ impl StiffnessSource {
                             rows.push(k);
                         }
                         None if i == 0 => continue, // header
-                        _ => return Err(EnvError::Input(format!(
+                        _ => {
+                            return Err(EnvError::Input(format!(
                             "stiffness file {} line {}: expected two numbers k_x,k_y, got {line:?}",
                             path.display(),
                             i + 1
-                        ))),
+                        )))
+                        }
                     }
                 }
                 if rows.len() != steps {

@@ -7,6 +7,7 @@ use super::small::{
 use crate::error::{GpError, Result};
 use crate::kernel::Hyper;
 use crate::model::GpModel;
+use crate::sparse::{DynamicsModel, SparseGpModel};
 use faer::{Mat, MatRef};
 use rayon::prelude::*;
 
@@ -44,6 +45,24 @@ impl<'a> MmModel<'a> {
             beta: gp.beta(),
             hyp: gp.hyp(),
             variance: Variance::Model(gp.inv_k()),
+        }
+    }
+
+    /// Sparse FITC GP with model uncertainty (PILCO gp1): the inducing inputs are the centres.
+    pub fn sparse(gp: &'a SparseGpModel) -> Self {
+        Self {
+            centres: gp.inputs(),
+            beta: gp.beta(),
+            hyp: gp.hyp(),
+            variance: Variance::Model(gp.inv_k()),
+        }
+    }
+
+    /// A trained dynamics model, full or sparse, with model uncertainty.
+    pub fn dynamics(model: &'a DynamicsModel) -> Self {
+        match model {
+            DynamicsModel::Full(gp) => Self::with_uncertainty(gp),
+            DynamicsModel::Sparse(gp) => Self::sparse(gp),
         }
     }
 

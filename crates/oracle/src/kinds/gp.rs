@@ -7,10 +7,11 @@
 use crate::{compare, Case, Class, Comparison, KindChecker, OracleError, Tensor, Tolerance};
 use faer::Mat;
 use vicpilco_gp::moments::{backward, forward, MmCache, MmModel, Moments, MomentsAdjoint};
-use vicpilco_gp::{GpModel, Hyper};
+use vicpilco_gp::{GpModel, Hyper, SparseGpModel};
 
 pub struct Gp0;
 pub struct Gp2;
+pub struct Gp1;
 
 fn compute_err(case: &Case, e: impl std::fmt::Display) -> OracleError {
     OracleError::Compute {
@@ -227,5 +228,28 @@ impl KindChecker for Gp2 {
         let mm = MmModel::mean_only(&gp);
         let (moments, cache) = forward(&mm, &m, s.as_ref()).map_err(|e| compute_err(case, e))?;
         compare_moments(case, &mm, Some(&gp), &moments, &cache)
+    }
+}
+
+impl KindChecker for Gp1 {
+    fn kind(&self) -> &'static str {
+        "gp1"
+    }
+    fn check(&self, case: &Case) -> Result<Vec<Comparison>, OracleError> {
+        let hyp = case.mat("hyp")?;
+        let hyps = (0..hyp.ncols())
+            .map(|e| Hyper::from_pilco(&(0..hyp.nrows()).map(|r| hyp[(r, e)]).collect::<Vec<_>>()))
+            .collect();
+        let gp = SparseGpModel::new(
+            case.mat("inputs")?.as_ref(),
+            case.mat("targets")?.as_ref(),
+            hyps,
+            case.mat("induce")?,
+        )
+        .map_err(|e| compute_err(case, e))?;
+        let (m, s) = m_and_s(case)?;
+        let mm = MmModel::sparse(&gp);
+        let (moments, cache) = forward(&mm, &m, s.as_ref()).map_err(|e| compute_err(case, e))?;
+        compare_moments(case, &mm, None, &moments, &cache)
     }
 }

@@ -7,6 +7,7 @@ mod gp;
 mod gsat;
 mod gtrig;
 mod loss_sat;
+mod nlml;
 mod value;
 
 use crate::KindChecker;
@@ -15,7 +16,9 @@ use crate::KindChecker;
 pub fn checkers() -> Vec<&'static dyn KindChecker> {
     vec![
         &gp::Gp0,
+        &gp::Gp1,
         &gp::Gp2,
+        &nlml::Nlml,
         &conlin::Conlin,
         &gsat::GSat,
         &gtrig::GTrig,

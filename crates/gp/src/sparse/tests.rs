@@ -1,0 +1,300 @@
+use super::fitc::se_cross;
+use super::*;
+use crate::fd;
+use crate::kernel::{Kernel, SquaredExponential};
+use crate::linalg::Chol;
+use crate::train::input_std;
+use faer::Mat;
+use rand::rngs::ChaCha8Rng;
+use rand::{RngExt, SeedableRng};
+use rand_distr::StandardNormal;
+
+fn normal_mat(r: usize, c: usize, rng: &mut ChaCha8Rng) -> Mat<f64> {
+    Mat::from_fn(r, c, |_, _| rng.sample::<f64, _>(StandardNormal))
+}
+
+/// Smooth targets of every output, with noise 0.05.
+fn smooth(x: &Mat<f64>, e: usize, rng: &mut ChaCha8Rng) -> Mat<f64> {
+    let d = x.ncols();
+    Mat::from_fn(x.nrows(), e, |i, k| {
+        let s: f64 = (0..d).map(|c| x[(i, c)] * (1.0 + 0.3 * c as f64)).sum();
+        (s / d as f64 * (1.0 + k as f64)).sin() + 0.2 * x[(i, 0)] * k as f64
+    }) + Mat::from_fn(x.nrows(), e, |_, _| {
+        0.05 * rng.sample::<f64, _>(StandardNormal)
+    })
+}
+
+fn hyp_for(x: &Mat<f64>, rng: &mut ChaCha8Rng) -> Hyper {
+    Hyper {
+        log_ls: input_std(x.as_ref())
+            .iter()
+            .map(|s| s.ln() + rng.random_range(-0.3..0.5))
+            .collect(),
+        log_sf: rng.random_range(-0.3..0.3),
+        log_sn: rng.random_range(-2.5..-1.0),
+    }
+}
+
+fn col(m: &Mat<f64>, e: usize) -> Vec<f64> {
+    (0..m.nrows()).map(|i| m[(i, e)]).collect()
+}
+
+/// The FITC quantities from their definitions with dense N×N algebra (small problems only).
+struct Dense {
+    nlml: f64,
+    beta: Vec<f64>,
+    inv_k: Mat<f64>,
+}
+
+fn dense(x: &Mat<f64>, y: &[f64], h: &Hyper, u: &Mat<f64>) -> Dense {
+    let (n, m) = (x.nrows(), u.nrows());
+    let k = SquaredExponential;
+    let mut kmm = k.gram(h, u.as_ref());
+    for i in 0..m {
+        kmm[(i, i)] += FITC_RIDGE;
+    }
+    let kmn = k.cross(h, u.as_ref(), x.as_ref());
+    let lmm = Chol::new(kmm.as_ref(), "kmm").unwrap();
+    let q = kmn.transpose() * lmm.solve(kmn.as_ref());
+    let gamma: Vec<f64> = (0..n).map(|i| h.sf2() - q[(i, i)] + h.sn2()).collect();
+    // C = Q + Γ: Q off the diagonal, σ_f² + σ_n² on it.
+    let mut c = q.clone();
+    for i in 0..n {
+        c[(i, i)] = q[(i, i)] + gamma[i];
+    }
+    let cc = Chol::new(c.as_ref(), "C").unwrap();
+    let a = cc.solve_vec(y);
+    let nlml = 0.5 * y.iter().zip(&a).map(|(p, q)| p * q).sum::<f64>()
+        + 0.5 * cc.log_det()
+        + 0.5 * n as f64 * (2.0 * std::f64::consts::PI).ln();
+    let kg = Mat::from_fn(m, n, |i, j| kmn[(i, j)] / gamma[j]);
+    let b = &kmm + &kg * kmn.transpose();
+    let bc = Chol::new(b.as_ref(), "B").unwrap();
+    let beta = bc.solve_vec(&super::fitc::mat_vec(kg.as_ref(), y));
+    let inv_k = lmm.inverse() - bc.inverse();
+    Dense { nlml, beta, inv_k }
+}
+
+#[test]
+fn fitc_value_beta_and_variance_matrix_match_the_dense_definitions() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    for &(n, m, d) in &[(6, 3, 1), (30, 8, 3), (50, 12, 5)] {
+        let x = normal_mat(n, d, &mut rng);
+        let y = smooth(&x, 2, &mut rng);
+        let u = normal_mat(m, d, &mut rng);
+        let hyp = vec![hyp_for(&x, &mut rng), hyp_for(&x, &mut rng)];
+        let model = SparseGpModel::new(x.as_ref(), y.as_ref(), hyp.clone(), u.clone()).unwrap();
+        for (e, h) in hyp.iter().enumerate() {
+            let want = dense(&x, &col(&y, e), h, &u);
+            let got = fitc_nlml(x.as_ref(), &col(&y, e), h, u.as_ref()).unwrap();
+            assert!(
+                fd::rel_diff(got.value, want.nlml, 1.0) < 1e-10,
+                "{} vs {}",
+                got.value,
+                want.nlml
+            );
+            assert!(fd::rel_diff(model.nlml()[e], want.nlml, 1.0) < 1e-10);
+            let bmax = want.beta.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+            for i in 0..m {
+                assert!((model.beta()[(i, e)] - want.beta[i]).abs() < 1e-8 * bmax.max(1.0));
+            }
+            let kmax = (0..m)
+                .flat_map(|i| (0..m).map(move |j| (i, j)))
+                .fold(0.0f64, |a, (i, j)| a.max(want.inv_k[(i, j)].abs()));
+            for i in 0..m {
+                for j in 0..m {
+                    let diff = (model.inv_k()[e][(i, j)] - want.inv_k[(i, j)]).abs();
+                    assert!(
+                        diff < 1e-7 * kmax.max(1.0),
+                        "inv_k[{i},{j}] off by {diff:e}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn fitc_gradients_match_finite_differences() {
+    let mut rng = ChaCha8Rng::seed_from_u64(22);
+    for &(n, m, d) in &[(5, 3, 1), (30, 8, 3), (100, 15, 7)] {
+        let x = normal_mat(n, d, &mut rng);
+        let y = col(&smooth(&x, 1, &mut rng), 0);
+        // Inducing inputs away from each other: keeps K_mm + 1e-6 I well conditioned so the
+        // finite differences are not swamped by rounding.
+        let u = Mat::from_fn(m, d, |i, c| x[((i * n) / m, c)] + 0.1 * (c as f64 - 0.5));
+        let h = hyp_for(&x, &mut rng);
+        let g = fitc_nlml(x.as_ref(), &y, &h, u.as_ref()).unwrap();
+
+        // w.r.t. the inducing inputs (row-major flat).
+        let u0: Vec<f64> = (0..m)
+            .flat_map(|i| (0..d).map(move |c| (i, c)))
+            .map(|(i, c)| u[(i, c)])
+            .collect();
+        let mut fu = |p: &[f64]| {
+            let uu = MatRef::from_row_major_slice(p, m, d);
+            vec![fitc_nlml(x.as_ref(), &y, &h, uu).unwrap().value]
+        };
+        let j = fd::jacobian(&mut fu, &u0, 1e-4);
+        let scale = j[0].iter().fold(1e-3f64, |a, b| a.max(b.abs()));
+        for i in 0..m {
+            for c in 0..d {
+                let (a, b) = (g.grad_inducing[(i, c)], j[0][i * d + c]);
+                assert!(
+                    (a - b).abs() < 1e-6 * scale,
+                    "N={n} M={m} D={d} u[{i},{c}]: analytic {a}, fd {b}"
+                );
+            }
+        }
+        // w.r.t. the log hyper-parameters.
+        let mut fh = |p: &[f64]| {
+            vec![
+                fitc_nlml(x.as_ref(), &y, &Hyper::from_pilco(p), u.as_ref())
+                    .unwrap()
+                    .value,
+            ]
+        };
+        let j = fd::jacobian(&mut fh, &h.to_pilco(), 1e-4);
+        for (k, (a, b)) in g.grad_hyp.iter().zip(&j[0]).enumerate() {
+            assert!(
+                fd::rel_diff(*a, *b, 1e-2) < 1e-6,
+                "N={n} M={m} D={d} hyp[{k}]: analytic {a}, fd {b}"
+            );
+        }
+    }
+}
+
+#[test]
+fn inducing_inputs_at_the_training_inputs_reproduce_the_full_gp() {
+    let mut rng = ChaCha8Rng::seed_from_u64(23);
+    let (n, d) = (40, 3);
+    let x = normal_mat(n, d, &mut rng);
+    let y = smooth(&x, 2, &mut rng);
+    let mut hyp = vec![hyp_for(&x, &mut rng), hyp_for(&x, &mut rng)];
+    // Noise σ_n ≈ 0.3: the 1e-6 ridge on K_mm then changes predictions by ~1e-6 (oracle
+    // README, gp1 notes: the effect grows to 1e-4…1e-3 at σ_n ≈ 0.01).
+    for h in &mut hyp {
+        h.log_sn = (0.3f64).ln();
+    }
+    let full = GpModel::new(x.clone(), y.clone(), hyp.clone()).unwrap();
+    let sparse = SparseGpModel::new(x.as_ref(), y.as_ref(), hyp, x.clone()).unwrap();
+    for t in 0..10 {
+        let xs: Vec<f64> = (0..d).map(|c| 0.7 * ((t * 3 + c) as f64).sin()).collect();
+        let (mf, vf) = full.predict(&xs);
+        let (ms, vs) = sparse.predict(&xs);
+        for e in 0..2 {
+            assert!((mf[e] - ms[e]).abs() < 1e-5, "mean {} vs {}", mf[e], ms[e]);
+            assert!((vf[e] - vs[e]).abs() < 1e-5, "var {} vs {}", vf[e], vs[e]);
+        }
+    }
+    // And the moment-matching ingredients: β maps to the same predictor.
+    assert_eq!(sparse.inputs().nrows(), n);
+    assert_eq!(sparse.beta().ncols(), 2);
+}
+
+#[test]
+fn se_cross_matches_the_kernel() {
+    let mut rng = ChaCha8Rng::seed_from_u64(24);
+    let a = normal_mat(7, 3, &mut rng);
+    let b = normal_mat(5, 3, &mut rng);
+    let h = hyp_for(&a, &mut rng);
+    let got = se_cross(&h, a.as_ref(), b.as_ref());
+    let want = SquaredExponential.cross(&h, a.as_ref(), b.as_ref());
+    for i in 0..7 {
+        for j in 0..5 {
+            assert!((got[(i, j)] - want[(i, j)]).abs() < 1e-14);
+        }
+    }
+}
+
+#[test]
+fn subset_selection_is_deterministic_distinct_and_seeded() {
+    let a = select_subset(1000, 50, 7);
+    assert_eq!(a, select_subset(1000, 50, 7));
+    assert_ne!(a, select_subset(1000, 50, 8));
+    assert_eq!(a.len(), 50);
+    assert!(a.windows(2).all(|w| w[0] < w[1]) && a[49] < 1000);
+    assert_eq!(select_subset(5, 10, 1), vec![0, 1, 2, 3, 4]);
+}
+
+#[test]
+fn training_inducing_inputs_decreases_the_summed_fitc_nlml() {
+    let mut rng = ChaCha8Rng::seed_from_u64(25);
+    let (n, d, m) = (120, 2, 10);
+    let x = normal_mat(n, d, &mut rng);
+    let y = smooth(&x, 2, &mut rng);
+    let hyp = vec![hyp_for(&x, &mut rng), hyp_for(&x, &mut rng)];
+    let sub = select_subset(n, m, 3);
+    let u0 = Mat::from_fn(m, d, |i, c| x[(sub[i], c)]);
+    let opts = InducingOptions {
+        max_iters: 30,
+        ..Default::default()
+    };
+    let (u, rep) = train_inducing(x.as_ref(), y.as_ref(), &hyp, u0.as_ref(), &opts).unwrap();
+    assert!(rep.nlml < rep.initial_nlml - 1.0, "{rep:?}");
+    let sum: f64 = (0..2)
+        .map(|e| {
+            fitc_nlml(x.as_ref(), &col(&y, e), &hyp[e], u.as_ref())
+                .unwrap()
+                .value
+        })
+        .sum();
+    assert!((sum - rep.nlml).abs() < 1e-9 * sum.abs());
+    assert!((rep.output_nlml.iter().sum::<f64>() - rep.nlml).abs() < 1e-9 * sum.abs());
+}
+
+#[test]
+fn dynamics_model_switches_to_sparse_above_the_threshold() {
+    let mut rng = ChaCha8Rng::seed_from_u64(26);
+    let (n, d) = (60, 2);
+    let x = normal_mat(n, d, &mut rng);
+    let y = smooth(&x, 2, &mut rng);
+    let init = vec![hyp_for(&x, &mut rng), hyp_for(&x, &mut rng)];
+    let mut opts = DynamicsOptions {
+        sparse_threshold: 60,
+        ..Default::default()
+    };
+    opts.sparse.num_inducing = 12;
+    opts.sparse.inducing.max_iters = 10;
+    let (full, rep) = DynamicsModel::fit(x.clone(), y.clone(), &init, None, &opts).unwrap();
+    assert!(!full.is_sparse() && matches!(rep, DynamicsReport::Full(_)));
+    assert_eq!(full.inputs().nrows(), n);
+
+    opts.sparse_threshold = 59;
+    let (sp, rep) = DynamicsModel::fit(x.clone(), y.clone(), &init, None, &opts).unwrap();
+    assert!(sp.is_sparse());
+    assert_eq!(sp.inputs().nrows(), 12);
+    assert_eq!(sp.beta().nrows(), 12);
+    assert_eq!(sp.inv_k()[1].nrows(), 12);
+    let DynamicsReport::Sparse(r) = rep else {
+        panic!("expected a sparse report")
+    };
+    let ind = r.inducing.expect("inducing inputs were optimised");
+    assert!(ind.nlml <= ind.initial_nlml);
+    // Sparse predictions are close to the full GP on this smooth function.
+    let (mf, _) = full.predict(&[0.2, -0.3]);
+    let (ms, _) = sp.predict(&[0.2, -0.3]);
+    for e in 0..2 {
+        assert!((mf[e] - ms[e]).abs() < 0.1, "{mf:?} vs {ms:?}");
+    }
+}
+
+#[test]
+fn bad_inducing_inputs_are_rejected_with_their_position() {
+    let mut rng = ChaCha8Rng::seed_from_u64(27);
+    let x = normal_mat(10, 2, &mut rng);
+    let y = smooth(&x, 1, &mut rng);
+    let hyp = vec![hyp_for(&x, &mut rng)];
+    let mut u = normal_mat(4, 2, &mut rng);
+    u[(2, 1)] = f64::NAN;
+    let err = SparseGpModel::new(x.as_ref(), y.as_ref(), hyp.clone(), u).unwrap_err();
+    assert!(
+        matches!(err, GpError::NonFinite { row: 2, col: 1, .. }),
+        "{err:?}"
+    );
+    let u = normal_mat(4, 3, &mut rng);
+    assert!(matches!(
+        SparseGpModel::new(x.as_ref(), y.as_ref(), hyp, u),
+        Err(GpError::Shape { .. })
+    ));
+}

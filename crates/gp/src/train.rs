@@ -1,0 +1,224 @@
+//! Hyper-parameter training of the exact multi-output GP (PILCO's `train.m`, full-GP part).
+//!
+//! Each output e has its own log hyper-parameters θ_e = (log ℓ_1..log ℓ_D, log σ_f, log σ_n)
+//! and is trained independently by minimising
+//!
+//! `nlml_e(θ_e) [+ hypCurb(θ_e)]`, `nlml = ½ yᵀ(K+σ_n²I)⁻¹y + ½ log|K+σ_n²I| + (N/2) log 2π`
+//!
+//! (see [`nlml`](crate::train::nlml()) and [`HypCurb`]) with L-BFGS from argmin
+//! ([`minimize`]), warm-started from the given hyper-parameters. Outputs run in parallel
+//! (rayon); results are collected in output order, so the outcome does not depend on the
+//! thread count.
+//!
+//! pilco-matlab minimises `hypCurb` with Rasmussen's `minimize.m` (BFGS, 500 evaluations);
+//! the optimum is the same, the path is not.
+
+mod lbfgs;
+mod nlml;
+
+pub use lbfgs::{minimize, MinimizeOptions, MinimizeResult, Termination, MAX_RESTARTS};
+pub use nlml::{input_std, nlml, nlml_curb, nlml_with_kernel, HypCurb, NlmlEval, NlmlWorkspace};
+
+use crate::error::{GpError, Result};
+use crate::kernel::{Hyper, SquaredExponential};
+use crate::linalg::JitterPolicy;
+use crate::model::validate_data;
+use faer::MatRef;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::time::{Duration, Instant};
+
+/// Options of [`train`].
+#[derive(Clone, Debug)]
+pub struct TrainOptions {
+    /// L-BFGS iterations per output (default 100).
+    pub max_iters: u64,
+    /// Stop when `‖∇‖₂` of the objective is below this (default 1e-6).
+    pub grad_tol: f64,
+    /// Stop when one iteration changes the objective by less than
+    /// `rel_tol · max(|f|, |f_prev|, 1)` (default 1e-6).
+    pub rel_tol: f64,
+    /// PILCO's `hypCurb` penalty; `None` trains the plain likelihood (default: on, as PILCO).
+    pub penalty: Option<HypCurb>,
+    /// L-BFGS memory (default 10 correction pairs).
+    pub memory: usize,
+    /// Jitter allowed when `K + σ_n² I` does not factorise.
+    pub jitter: JitterPolicy,
+}
+
+impl Default for TrainOptions {
+    fn default() -> Self {
+        Self {
+            max_iters: 100,
+            grad_tol: 1e-6,
+            rel_tol: 1e-6,
+            penalty: Some(HypCurb::default()),
+            memory: 10,
+            jitter: JitterPolicy::default(),
+        }
+    }
+}
+
+impl TrainOptions {
+    pub(crate) fn minimize_options(&self) -> MinimizeOptions {
+        MinimizeOptions {
+            max_iters: self.max_iters,
+            grad_tol: self.grad_tol,
+            rel_tol: self.rel_tol,
+            memory: self.memory,
+        }
+    }
+}
+
+/// How the training of one output went.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OutputReport {
+    /// Final value of the minimised objective (nlml plus the penalty when it is on).
+    pub objective: f64,
+    /// Final negative log marginal likelihood without the penalty.
+    pub nlml: f64,
+    /// Objective at the start point.
+    pub initial_objective: f64,
+    /// L-BFGS iterations.
+    pub iterations: u64,
+    /// Objective evaluations (value and gradient together), including the final one.
+    pub evaluations: usize,
+    pub termination: Termination,
+    pub wall_time: Duration,
+    /// Jitter the Cholesky factorisation needed at the final hyper-parameters (0 when none).
+    pub jitter: f64,
+    /// Largest jitter needed at any point the optimiser evaluated.
+    pub max_jitter: f64,
+}
+
+/// What [`train`] returns besides the hyper-parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrainReport {
+    /// One entry per output, in output order.
+    pub outputs: Vec<OutputReport>,
+    /// Wall time of the whole call.
+    pub wall_time: Duration,
+}
+
+impl TrainReport {
+    /// Final objective values, one per output.
+    pub fn objectives(&self) -> Vec<f64> {
+        self.outputs.iter().map(|o| o.objective).collect()
+    }
+}
+
+/// Train the hyper-parameters of every output of an exact GP on `inputs` (N×D) and `targets`
+/// (N×E), starting from `init` (one [`Hyper`] per output).
+///
+/// Errors: NaN/inf in the data ([`GpError::NonFinite`] naming row and column), shape
+/// mismatches, and a start point where the objective cannot be evaluated. Trial points where it
+/// cannot be evaluated are rejected by the optimiser, not fatal.
+pub fn train(
+    inputs: MatRef<'_, f64>,
+    targets: MatRef<'_, f64>,
+    init: &[Hyper],
+    opts: &TrainOptions,
+) -> Result<(Vec<Hyper>, TrainReport)> {
+    let start = Instant::now();
+    validate_data(inputs, targets, init)?;
+    let c = input_std(inputs);
+    let results: Vec<Result<(Hyper, OutputReport)>> = init
+        .par_iter()
+        .enumerate()
+        .map(|(e, h)| {
+            let y: Vec<f64> = (0..targets.nrows()).map(|i| targets[(i, e)]).collect();
+            train_output(inputs, &y, h, &c, opts).map_err(|err| match err {
+                GpError::Optimiser(msg) => GpError::Optimiser(format!("output {e}: {msg}")),
+                other => other,
+            })
+        })
+        .collect();
+    let mut hyp = Vec::with_capacity(init.len());
+    let mut outputs = Vec::with_capacity(init.len());
+    for (e, r) in results.into_iter().enumerate() {
+        let (h, rep) = r?;
+        if rep.max_jitter > 0.0 {
+            tracing::warn!(
+                output = e,
+                final_jitter = rep.jitter,
+                max_jitter = rep.max_jitter,
+                "GP training needed Cholesky jitter"
+            );
+        }
+        tracing::debug!(output = e, nlml = rep.nlml, iterations = rep.iterations, termination = ?rep.termination, "trained GP output");
+        hyp.push(h);
+        outputs.push(rep);
+    }
+    Ok((
+        hyp,
+        TrainReport {
+            outputs,
+            wall_time: start.elapsed(),
+        },
+    ))
+}
+
+/// Objective of one output: nlml (+ penalty).
+fn objective(
+    inputs: MatRef<'_, f64>,
+    y: &[f64],
+    h: &Hyper,
+    c: &[f64],
+    opts: &TrainOptions,
+    ws: &mut NlmlWorkspace,
+) -> Result<(NlmlEval, f64)> {
+    let mut e = nlml_with_kernel(&SquaredExponential, inputs, y, h, opts.jitter, ws)?;
+    let plain = e.value;
+    if let Some(curb) = &opts.penalty {
+        let (p, g) = curb.penalty(h, c);
+        e.value += p;
+        e.grad.iter_mut().zip(&g).for_each(|(a, b)| *a += b);
+    }
+    Ok((e, plain))
+}
+
+fn train_output(
+    inputs: MatRef<'_, f64>,
+    y: &[f64],
+    init: &Hyper,
+    c: &[f64],
+    opts: &TrainOptions,
+) -> Result<(Hyper, OutputReport)> {
+    let start = Instant::now();
+    let mut ws = NlmlWorkspace::new(inputs.nrows());
+    let mut max_jitter = 0.0f64;
+    let mut initial_objective = None;
+    let mut f = |x: &[f64]| -> Option<(f64, Vec<f64>)> {
+        let h = Hyper::from_pilco(x);
+        let (e, _) = objective(inputs, y, &h, c, opts, &mut ws).ok()?;
+        max_jitter = max_jitter.max(e.jitter);
+        initial_objective.get_or_insert(e.value);
+        Some((e.value, e.grad))
+    };
+    let Some(r) = minimize(&mut f, init.to_pilco(), &opts.minimize_options()) else {
+        // The start point cannot be evaluated: report the real reason.
+        objective(inputs, y, init, c, opts, &mut ws)?;
+        return Err(GpError::Optimiser(
+            "objective is not finite at the start point".into(),
+        ));
+    };
+    let best = Hyper::from_pilco(&r.x);
+    let (fin, plain) = objective(inputs, y, &best, c, opts, &mut ws)?;
+    Ok((
+        best,
+        OutputReport {
+            objective: fin.value,
+            nlml: plain,
+            initial_objective: initial_objective.unwrap_or(f64::NAN),
+            iterations: r.iterations,
+            evaluations: r.evaluations + 1,
+            termination: r.termination,
+            wall_time: start.elapsed(),
+            jitter: fin.jitter,
+            max_jitter,
+        },
+    ))
+}
+
+#[cfg(test)]
+mod tests;

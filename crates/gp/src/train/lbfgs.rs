@@ -1,0 +1,361 @@
+//! L-BFGS (argmin 0.11, More–Thuente line search, `Vec<f64>` backend) behind one function,
+//! [`minimize`], for objectives that return value and gradient together.
+//!
+//! * argmin asks for the cost and the gradient in separate calls at the same point, so the
+//!   objective sits behind a one-entry memo keyed on the exact parameter bits: each distinct
+//!   point is evaluated once ([`MinimizeResult::evaluations`] counts those).
+//! * A failed evaluation (not positive definite even with jitter, non-finite numbers) is
+//!   reported to argmin as `+inf`. The line search cannot interpolate through it and stops; the
+//!   minimiser then restarts from the best point so far with a fresh history and a 10× shorter
+//!   first step (at most [`MAX_RESTARTS`] times).
+//! * argmin's first L-BFGS step is the raw negative gradient (no curvature information yet),
+//!   which for a likelihood in log hyper-parameters can be a jump by hundreds of log units. The
+//!   objective handed to argmin is therefore scaled by `1/max(1, ‖∇f(x₀)‖)`, so the first trial
+//!   step has length ≤ 1. L-BFGS and the line search are invariant to this scale afterwards;
+//!   the stopping rules below are applied to the unscaled objective.
+//! * Stopping rules (the W1 bench rule): `‖∇f‖₂ ≤ grad_tol`, or the change of the objective in
+//!   one iteration `|f_k − f_{k−1}| ≤ rel_tol · max(|f_k|, |f_{k−1}|, 1)`, or `max_iters`.
+
+use argmin::core::{
+    CostFunction, Executor, Gradient, IterState, Problem, Solver, State, TerminationReason,
+    TerminationStatus, KV,
+};
+use argmin::solver::linesearch::MoreThuenteLineSearch;
+use argmin::solver::quasinewton::LBFGS;
+use serde::{Deserialize, Serialize};
+use std::cell::{Cell, RefCell};
+
+/// How many times a failed line search may restart the optimiser from the best point.
+pub const MAX_RESTARTS: usize = 2;
+
+/// Why an optimisation stopped.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Termination {
+    /// `‖∇f‖₂` fell below the gradient tolerance.
+    GradientNorm,
+    /// The objective changed by less than the relative tolerance in one iteration.
+    RelativeChange,
+    /// The iteration budget was used up.
+    MaxIterations,
+    /// The line search could not make progress (after the allowed restarts); the best point
+    /// found is returned. The text is argmin's message.
+    LineSearchFailed(String),
+}
+
+impl Termination {
+    /// True for the two convergence criteria.
+    pub fn converged(&self) -> bool {
+        matches!(self, Self::GradientNorm | Self::RelativeChange)
+    }
+}
+
+/// Stopping rules and memory of [`minimize`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MinimizeOptions {
+    pub max_iters: u64,
+    pub grad_tol: f64,
+    pub rel_tol: f64,
+    /// Number of correction pairs L-BFGS keeps.
+    pub memory: usize,
+}
+
+/// Outcome of [`minimize`].
+#[derive(Clone, Debug)]
+pub struct MinimizeResult {
+    /// Best point found.
+    pub x: Vec<f64>,
+    /// Objective value there.
+    pub value: f64,
+    /// L-BFGS iterations over all restarts.
+    pub iterations: u64,
+    /// Distinct objective evaluations (value and gradient together).
+    pub evaluations: usize,
+    pub termination: Termination,
+}
+
+/// One evaluated point: parameters, value, gradient.
+type Point = (Vec<f64>, f64, Vec<f64>);
+
+/// Memoised objective as argmin sees it: `scale · f`.
+struct Memo<'f, F> {
+    f: RefCell<&'f mut F>,
+    scale: f64,
+    last: RefCell<Option<Point>>,
+    evals: Cell<usize>,
+}
+
+impl<F: FnMut(&[f64]) -> Option<(f64, Vec<f64>)>> Memo<'_, F> {
+    fn eval(&self, x: &[f64]) -> (f64, Vec<f64>) {
+        if let Some((px, v, g)) = self.last.borrow().as_ref() {
+            if px.len() == x.len() && px.iter().zip(x).all(|(a, b)| a.to_bits() == b.to_bits()) {
+                return (*v, g.clone());
+            }
+        }
+        self.evals.set(self.evals.get() + 1);
+        let out = {
+            let mut f = self.f.borrow_mut();
+            (*f)(x)
+        };
+        let (v, g) = match out {
+            Some((v, g)) if v.is_finite() && g.iter().all(|a| a.is_finite()) => {
+                (self.scale * v, g.iter().map(|a| self.scale * a).collect())
+            }
+            _ => (f64::INFINITY, vec![f64::NAN; x.len()]),
+        };
+        *self.last.borrow_mut() = Some((x.to_vec(), v, g.clone()));
+        (v, g)
+    }
+}
+
+impl<F: FnMut(&[f64]) -> Option<(f64, Vec<f64>)>> CostFunction for Memo<'_, F> {
+    type Param = Vec<f64>;
+    type Output = f64;
+    fn cost(&self, x: &Vec<f64>) -> Result<f64, argmin::core::Error> {
+        Ok(self.eval(x).0)
+    }
+}
+
+impl<F: FnMut(&[f64]) -> Option<(f64, Vec<f64>)>> Gradient for Memo<'_, F> {
+    type Param = Vec<f64>;
+    type Gradient = Vec<f64>;
+    fn gradient(&self, x: &Vec<f64>) -> Result<Vec<f64>, argmin::core::Error> {
+        Ok(self.eval(x).1)
+    }
+}
+
+type Ls = MoreThuenteLineSearch<Vec<f64>, Vec<f64>, f64>;
+type St = IterState<Vec<f64>, Vec<f64>, (), (), (), f64>;
+
+/// argmin's L-BFGS with our stopping rules (argmin's own are absolute and set to 0).
+struct Lbfgs {
+    inner: LBFGS<Ls, Vec<f64>, Vec<f64>, f64>,
+    scale: f64,
+    grad_tol: f64,
+    rel_tol: f64,
+    reason: Option<Termination>,
+}
+
+impl<O> Solver<O, St> for Lbfgs
+where
+    LBFGS<Ls, Vec<f64>, Vec<f64>, f64>: Solver<O, St>,
+{
+    fn name(&self) -> &str {
+        "L-BFGS (vicpilco stopping rules)"
+    }
+
+    fn init(
+        &mut self,
+        problem: &mut Problem<O>,
+        state: St,
+    ) -> Result<(St, Option<KV>), argmin::core::Error> {
+        self.inner.init(problem, state)
+    }
+
+    fn next_iter(
+        &mut self,
+        problem: &mut Problem<O>,
+        state: St,
+    ) -> Result<(St, Option<KV>), argmin::core::Error> {
+        self.inner.next_iter(problem, state)
+    }
+
+    fn terminate(&mut self, state: &St) -> TerminationStatus {
+        let gnorm = state
+            .get_gradient()
+            .map(|g| g.iter().map(|v| v * v).sum::<f64>().sqrt() / self.scale)
+            .unwrap_or(f64::INFINITY);
+        let reason = if gnorm <= self.grad_tol {
+            Some(Termination::GradientNorm)
+        } else {
+            let (f, fp) = (state.get_cost(), state.get_prev_cost());
+            let tol = self.rel_tol * f.abs().max(fp.abs()).max(self.scale);
+            (fp.is_finite() && (f - fp).abs() <= tol).then_some(Termination::RelativeChange)
+        };
+        match reason {
+            Some(r) => {
+                self.reason = Some(r);
+                TerminationStatus::Terminated(TerminationReason::SolverConverged)
+            }
+            None => TerminationStatus::NotTerminated,
+        }
+    }
+}
+
+/// Minimise `f` (returning value and gradient, or `None` where it cannot be evaluated) by
+/// L-BFGS from `x0`. Returns `None` when `f` fails at `x0`.
+pub fn minimize<F>(f: &mut F, x0: Vec<f64>, opts: &MinimizeOptions) -> Option<MinimizeResult>
+where
+    F: FnMut(&[f64]) -> Option<(f64, Vec<f64>)>,
+{
+    let finite = |r: Option<(f64, Vec<f64>)>| {
+        r.filter(|(v, g)| v.is_finite() && g.iter().all(|a| a.is_finite()))
+    };
+    let (mut best_f, mut grad) = finite(f(&x0))?;
+    let mut best_x = x0;
+    let mut evaluations = 1;
+    let mut iterations = 0u64;
+    let mut step_shrink = 1.0;
+    let mut gnorm = grad.iter().map(|v| v * v).sum::<f64>().sqrt();
+    if gnorm <= opts.grad_tol {
+        return Some(MinimizeResult {
+            x: best_x,
+            value: best_f,
+            iterations,
+            evaluations,
+            termination: Termination::GradientNorm,
+        });
+    }
+    for restart in 0..=MAX_RESTARTS {
+        let scale = step_shrink / gnorm.max(1.0);
+        // Seed the memo with the start point, which is already evaluated.
+        let seed = (
+            best_x.clone(),
+            scale * best_f,
+            grad.iter().map(|g| scale * g).collect(),
+        );
+        let memo = Memo {
+            f: RefCell::new(&mut *f),
+            scale,
+            last: RefCell::new(Some(seed)),
+            evals: Cell::new(0),
+        };
+        let linesearch = MoreThuenteLineSearch::new();
+        let inner = LBFGS::new(linesearch, opts.memory.max(1))
+            .with_tolerance_grad(0.0)
+            .and_then(|s| s.with_tolerance_cost(0.0))
+            .expect("non-negative tolerances");
+        let solver = Lbfgs {
+            inner,
+            scale,
+            grad_tol: opts.grad_tol,
+            rel_tol: opts.rel_tol,
+            reason: None,
+        };
+        let remaining = opts.max_iters.saturating_sub(iterations);
+        let start = best_x.clone();
+        let run = Executor::new(memo, solver)
+            .configure(|s| s.param(start).max_iters(remaining))
+            .ctrlc(false)
+            .run();
+        let (mut state, solver, memo) = match run {
+            Ok(r) => (r.state, r.solver, r.problem.problem),
+            // argmin errors outside the line search (should not happen): keep the best point.
+            Err(e) => {
+                return Some(MinimizeResult {
+                    x: best_x,
+                    value: best_f,
+                    iterations,
+                    evaluations,
+                    termination: Termination::LineSearchFailed(e.to_string()),
+                })
+            }
+        };
+        iterations += state.get_iter();
+        evaluations += memo.as_ref().map_or(0, |m| m.evals.get());
+        let run_best = state.get_best_cost() / scale;
+        if let Some(x) = state.take_best_param() {
+            if run_best < best_f {
+                best_f = run_best;
+                best_x = x;
+            }
+        }
+        let termination = match (solver.reason, state.get_termination_reason()) {
+            (Some(r), _) => r,
+            (None, Some(TerminationReason::MaxItersReached)) => Termination::MaxIterations,
+            (None, Some(other)) => Termination::LineSearchFailed(other.text().to_string()),
+            (None, None) => Termination::MaxIterations,
+        };
+        let retry = matches!(termination, Termination::LineSearchFailed(_))
+            && restart < MAX_RESTARTS
+            && iterations < opts.max_iters;
+        if !retry {
+            return Some(MinimizeResult {
+                x: best_x,
+                value: best_f,
+                iterations,
+                evaluations,
+                termination,
+            });
+        }
+        // Restart from the best point with a fresh history and a shorter first step.
+        let (v, g) = finite(f(&best_x))?;
+        evaluations += 1;
+        best_f = v;
+        grad = g;
+        gnorm = grad.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if gnorm <= opts.grad_tol {
+            return Some(MinimizeResult {
+                x: best_x,
+                value: best_f,
+                iterations,
+                evaluations,
+                termination: Termination::GradientNorm,
+            });
+        }
+        step_shrink *= 0.1;
+    }
+    unreachable!("the restart loop returns on its last pass")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rosenbrock(x: &[f64]) -> Option<(f64, Vec<f64>)> {
+        let (a, b) = (x[0], x[1]);
+        let v = (1.0 - a).powi(2) + 100.0 * (b - a * a).powi(2);
+        let g = vec![
+            -2.0 * (1.0 - a) - 400.0 * a * (b - a * a),
+            200.0 * (b - a * a),
+        ];
+        Some((v, g))
+    }
+
+    #[test]
+    fn minimises_rosenbrock() {
+        let opts = MinimizeOptions {
+            max_iters: 200,
+            grad_tol: 1e-8,
+            rel_tol: 0.0,
+            memory: 10,
+        };
+        let r = minimize(&mut rosenbrock, vec![-1.2, 1.0], &opts).unwrap();
+        assert!(
+            (r.x[0] - 1.0).abs() < 1e-6 && (r.x[1] - 1.0).abs() < 1e-6,
+            "{r:?}"
+        );
+        assert!(r.termination.converged(), "{r:?}");
+    }
+
+    #[test]
+    fn failed_region_is_avoided_not_fatal() {
+        // A quadratic with its minimum at 3, undefined beyond 4: the first steps overshoot.
+        let mut f = |x: &[f64]| {
+            if x[0] > 4.0 {
+                None
+            } else {
+                Some((1000.0 * (x[0] - 3.0).powi(2), vec![2000.0 * (x[0] - 3.0)]))
+            }
+        };
+        let opts = MinimizeOptions {
+            max_iters: 100,
+            grad_tol: 1e-8,
+            rel_tol: 0.0,
+            memory: 5,
+        };
+        let r = minimize(&mut f, vec![-10.0], &opts).unwrap();
+        assert!((r.x[0] - 3.0).abs() < 1e-6, "{r:?}");
+    }
+
+    #[test]
+    fn failure_at_the_start_is_none() {
+        let mut f = |_: &[f64]| None;
+        let opts = MinimizeOptions {
+            max_iters: 10,
+            grad_tol: 1e-6,
+            rel_tol: 1e-6,
+            memory: 5,
+        };
+        assert!(minimize(&mut f, vec![0.0], &opts).is_none());
+    }
+}

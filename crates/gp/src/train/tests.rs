@@ -1,0 +1,245 @@
+use super::*;
+use crate::error::GpError;
+use crate::fd;
+use faer::Mat;
+use rand::rngs::ChaCha8Rng;
+use rand::{RngExt, SeedableRng};
+use rand_distr::StandardNormal;
+
+/// Smooth made-up data: N×D standard-normal inputs, y = sin(Σ x) + 0.1·cos(x_0) + noise.
+pub(crate) fn data(n: usize, d: usize, seed: u64) -> (Mat<f64>, Vec<f64>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let x = Mat::from_fn(n, d, |_, _| rng.sample::<f64, _>(StandardNormal));
+    let y = smooth_targets(&x, 0, seed);
+    (x, y)
+}
+
+/// Target k of a smooth made-up function of `x` (k = 0 is the one [`data`] returns), with
+/// noise of standard deviation 0.05.
+pub(crate) fn smooth_targets(x: &Mat<f64>, k: usize, seed: u64) -> Vec<f64> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_0000 ^ k as u64);
+    let (n, d) = (x.nrows(), x.ncols());
+    let w = 1.0 + 0.5 * k as f64;
+    (0..n)
+        .map(|i| {
+            let s: f64 = (0..d).map(|c| x[(i, c)]).sum();
+            let noise = 0.05 * rng.sample::<f64, _>(StandardNormal);
+            if k == 0 {
+                s.sin() + 0.1 * x[(i, 0)].cos() + noise
+            } else {
+                (w * s / d as f64).cos() * (1.0 + 0.2 * k as f64) + 0.3 * x[(i, d - 1)] + noise
+            }
+        })
+        .collect()
+}
+
+pub(crate) fn random_hyp(d: usize, rng: &mut ChaCha8Rng) -> Hyper {
+    Hyper {
+        log_ls: (0..d).map(|_| rng.random_range(-0.5..1.0)).collect(),
+        log_sf: rng.random_range(-0.5..0.5),
+        log_sn: rng.random_range(-3.0..-1.0),
+    }
+}
+
+/// A scalar function returning its value and gradient.
+pub(crate) type ValueGrad<'a> = dyn FnMut(&[f64]) -> (f64, Vec<f64>) + 'a;
+
+pub(crate) fn check_gradient(f: &mut ValueGrad<'_>, x: &[f64], step: f64, tol: f64) {
+    let (_, g) = f(x);
+    let mut value = |p: &[f64]| vec![f(p).0];
+    let j = fd::jacobian(&mut value, x, step);
+    for (k, (a, b)) in g.iter().zip(&j[0]).enumerate() {
+        let r = fd::rel_diff(*a, *b, 1e-3);
+        assert!(
+            r < tol,
+            "component {k}: analytic {a}, finite difference {b}, rel {r:e}"
+        );
+    }
+}
+
+#[test]
+fn nlml_gradient_matches_finite_differences() {
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    for &(n, d) in &[(5, 1), (30, 3), (100, 7), (30, 7), (100, 1)] {
+        let (x, y) = data(n, d, n as u64 * 31 + d as u64);
+        let h = random_hyp(d, &mut rng);
+        let mut f = |p: &[f64]| {
+            let e = nlml(x.as_ref(), &y, &Hyper::from_pilco(p)).unwrap();
+            (e.value, e.grad)
+        };
+        check_gradient(&mut f, &h.to_pilco(), 1e-4, 1e-7);
+    }
+}
+
+#[test]
+fn penalised_gradient_matches_finite_differences_also_where_the_penalty_is_large() {
+    let mut rng = ChaCha8Rng::seed_from_u64(12);
+    let curb = HypCurb::default();
+    for &(n, d) in &[(5, 1), (30, 3), (100, 7)] {
+        let (x, y) = data(n, d, 7 + n as u64);
+        let c = input_std(x.as_ref());
+        let mut h = random_hyp(d, &mut rng);
+        for extreme in [false, true] {
+            if extreme {
+                // Length-scale 150× the data spread, SNR ≈ e^7.5 ≈ 1800: penalty ≫ 1.
+                h.log_ls[0] = c[0].ln() + 5.0;
+                h.log_sf = 2.0;
+                h.log_sn = -5.5;
+            }
+            let (pen, _) = curb.penalty(&h, &c);
+            assert!(!extreme || pen > 10.0, "penalty {pen} should be large");
+            // The penalty alone.
+            let mut fp = |p: &[f64]| curb.penalty(&Hyper::from_pilco(p), &c);
+            check_gradient(&mut fp, &h.to_pilco(), 1e-4, 1e-7);
+            // nlml + penalty. At the extreme point K + σ_n²I has condition ~1e8, which puts
+            // ~1e-8 relative noise on the value (measured: the 5-point difference moves by
+            // ~1e-5 between steps 1e-4 and 1e-5), so it is checked more loosely there.
+            let mut f = |p: &[f64]| {
+                let e = nlml_curb(x.as_ref(), &y, &Hyper::from_pilco(p), &curb).unwrap();
+                (e.value, e.grad)
+            };
+            let (step, tol) = if extreme { (1e-3, 2e-5) } else { (1e-4, 1e-7) };
+            check_gradient(&mut f, &h.to_pilco(), step, tol);
+        }
+    }
+}
+
+fn start(x: &Mat<f64>, y: &[f64]) -> Hyper {
+    // pilco-matlab's initialisation: log std of inputs, log std(y), log std(y)/10.
+    let c = input_std(x.as_ref());
+    let sy = input_std(Mat::from_fn(y.len(), 1, |i, _| y[i]).as_ref())[0];
+    Hyper {
+        log_ls: c.iter().map(|v| v.ln()).collect(),
+        log_sf: sy.ln(),
+        log_sn: (sy / 10.0).ln(),
+    }
+}
+
+#[test]
+fn training_decreases_the_objective_and_warm_start_stops_quickly() {
+    let (x, y1) = data(80, 3, 5);
+    let y2 = smooth_targets(&x, 1, 5);
+    let targets = Mat::from_fn(80, 2, |i, e| if e == 0 { y1[i] } else { y2[i] });
+    let init = vec![start(&x, &y1), start(&x, &y2)];
+    for penalty in [Some(HypCurb::default()), None] {
+        let opts = TrainOptions {
+            penalty,
+            ..Default::default()
+        };
+        let (hyp, rep) = train(x.as_ref(), targets.as_ref(), &init, &opts).unwrap();
+        assert_eq!(rep.outputs.len(), 2);
+        for (e, o) in rep.outputs.iter().enumerate() {
+            assert!(
+                o.objective < o.initial_objective - 1.0,
+                "output {e}: {} → {}",
+                o.initial_objective,
+                o.objective
+            );
+            assert!(o.termination.converged(), "output {e}: {:?}", o.termination);
+            assert!(o.evaluations as u64 > o.iterations);
+            assert_eq!(o.jitter, 0.0);
+            // The reported objective is the objective at the returned hyper-parameters.
+            let y = if e == 0 { &y1 } else { &y2 };
+            let plain = nlml(x.as_ref(), y, &hyp[e]).unwrap().value;
+            assert!((plain - o.nlml).abs() < 1e-9 * plain.abs().max(1.0));
+        }
+        // Warm start from the optimum: converged after at most a couple of iterations.
+        let (hyp2, rep2) = train(x.as_ref(), targets.as_ref(), &hyp, &opts).unwrap();
+        for (o1, o2) in rep.outputs.iter().zip(&rep2.outputs) {
+            assert!(
+                o2.iterations <= 3,
+                "warm start took {} iterations",
+                o2.iterations
+            );
+            assert!(o2.objective <= o1.objective + 1e-9 * o1.objective.abs().max(1.0));
+        }
+        assert_eq!(hyp2.len(), 2);
+    }
+}
+
+#[test]
+fn training_is_the_same_on_one_thread_and_on_many() {
+    let (x, y1) = data(40, 2, 8);
+    let y2 = smooth_targets(&x, 1, 8);
+    let targets = Mat::from_fn(40, 2, |i, e| if e == 0 { y1[i] } else { y2[i] });
+    let init = vec![start(&x, &y1), start(&x, &y2)];
+    let opts = TrainOptions::default();
+    let (h_many, _) = train(x.as_ref(), targets.as_ref(), &init, &opts).unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let (h_one, _) = pool
+        .install(|| train(x.as_ref(), targets.as_ref(), &init, &opts))
+        .unwrap();
+    assert_eq!(h_many, h_one);
+}
+
+#[test]
+fn nan_in_the_data_names_row_and_column() {
+    let (mut x, y) = data(10, 3, 1);
+    let mut targets = Mat::from_fn(10, 1, |i, _| y[i]);
+    let init = vec![start(&x, &y)];
+    x[(7, 2)] = f64::NAN;
+    let err = train(
+        x.as_ref(),
+        targets.as_ref(),
+        &init,
+        &TrainOptions::default(),
+    )
+    .unwrap_err();
+    match &err {
+        GpError::NonFinite { row, col, .. } => assert_eq!((*row, *col), (7, 2)),
+        other => panic!("expected NonFinite, got {other:?}"),
+    }
+    assert!(err.to_string().contains("row 7, column 2"), "{err}");
+    x[(7, 2)] = 0.0;
+    targets[(3, 0)] = f64::INFINITY;
+    let err = train(
+        x.as_ref(),
+        targets.as_ref(),
+        &init,
+        &TrainOptions::default(),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(err, GpError::NonFinite { row: 3, col: 0, .. }),
+        "{err:?}"
+    );
+}
+
+#[test]
+fn duplicate_points_with_tiny_noise_report_jitter_instead_of_failing() {
+    // Every input appears twice and the noise is ~1e-12 of the signal: K + σ_n² I is singular
+    // to working precision at the start point.
+    let (x0, y0) = data(15, 2, 3);
+    let x = Mat::from_fn(30, 2, |i, c| x0[(i % 15, c)]);
+    let y: Vec<f64> = (0..30).map(|i| y0[i % 15]).collect();
+    let targets = Mat::from_fn(30, 1, |i, _| y[i]);
+    let mut h = start(&x, &y);
+    h.log_sn = h.log_sf - 14.0 * std::f64::consts::LN_10 / 2.0 - 8.0;
+    let (_, rep) = train(x.as_ref(), targets.as_ref(), &[h], &TrainOptions::default()).unwrap();
+    let o = &rep.outputs[0];
+    assert!(o.max_jitter > 0.0, "{o:?}");
+    assert!(o.objective.is_finite() && o.objective < o.initial_objective);
+}
+
+#[test]
+fn shape_errors_are_reported() {
+    let (x, y) = data(10, 3, 1);
+    let targets = Mat::from_fn(10, 1, |i, _| y[i]);
+    let bad = Hyper {
+        log_ls: vec![0.0; 2],
+        log_sf: 0.0,
+        log_sn: -1.0,
+    };
+    assert!(matches!(
+        train(
+            x.as_ref(),
+            targets.as_ref(),
+            &[bad],
+            &TrainOptions::default()
+        ),
+        Err(GpError::Shape { .. })
+    ));
+}
