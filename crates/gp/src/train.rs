@@ -66,6 +66,7 @@ impl TrainOptions {
             grad_tol: self.grad_tol,
             rel_tol: self.rel_tol,
             memory: self.memory,
+            max_line_search_evals: None,
         }
     }
 }

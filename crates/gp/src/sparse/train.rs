@@ -197,6 +197,7 @@ pub fn train_inducing(
         grad_tol: opts.grad_tol,
         rel_tol: opts.rel_tol,
         memory: opts.memory,
+        max_line_search_evals: None,
     };
     let r = minimize(&mut f, x0, &mopts).ok_or_else(|| GpError::Numerical {
         what: "FITC nlml at the initial inducing inputs".into(),

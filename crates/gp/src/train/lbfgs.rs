@@ -20,7 +20,7 @@ use argmin::core::{
     CostFunction, Executor, Gradient, IterState, Problem, Solver, State, TerminationReason,
     TerminationStatus, KV,
 };
-use argmin::solver::linesearch::MoreThuenteLineSearch;
+use argmin::solver::linesearch::{LineSearch, MoreThuenteLineSearch};
 use argmin::solver::quasinewton::LBFGS;
 use serde::{Deserialize, Serialize};
 use std::cell::{Cell, RefCell};
@@ -57,6 +57,10 @@ pub struct MinimizeOptions {
     pub rel_tol: f64,
     /// Number of correction pairs L-BFGS keeps.
     pub memory: usize,
+    /// At most this many evaluations in one line search (PILCO's MFEPLS); `None`: unbounded.
+    /// A line search cut short hands its last trial point to L-BFGS; the best point seen is
+    /// still what [`minimize`] returns.
+    pub max_line_search_evals: Option<u64>,
 }
 
 /// Outcome of [`minimize`].
@@ -126,9 +130,56 @@ impl<F: FnMut(&[f64]) -> Option<(f64, Vec<f64>)>> Gradient for Memo<'_, F> {
 type Ls = MoreThuenteLineSearch<Vec<f64>, Vec<f64>, f64>;
 type St = IterState<Vec<f64>, Vec<f64>, (), (), (), f64>;
 
+/// More–Thuente, stopped after a fixed number of trial points (PILCO's MFEPLS).
+#[derive(Clone)]
+struct BoundedLineSearch {
+    inner: Ls,
+    max_evals: Option<u64>,
+}
+
+impl LineSearch<Vec<f64>, f64> for BoundedLineSearch {
+    fn search_direction(&mut self, direction: Vec<f64>) {
+        self.inner.search_direction(direction)
+    }
+    fn initial_step_length(&mut self, step_length: f64) -> Result<(), argmin::core::Error> {
+        self.inner.initial_step_length(step_length)
+    }
+}
+
+impl<O> Solver<O, St> for BoundedLineSearch
+where
+    Ls: Solver<O, St>,
+{
+    fn name(&self) -> &str {
+        "More-Thuente line search (bounded evaluations)"
+    }
+    fn init(
+        &mut self,
+        problem: &mut Problem<O>,
+        state: St,
+    ) -> Result<(St, Option<KV>), argmin::core::Error> {
+        self.inner.init(problem, state)
+    }
+    fn next_iter(
+        &mut self,
+        problem: &mut Problem<O>,
+        state: St,
+    ) -> Result<(St, Option<KV>), argmin::core::Error> {
+        self.inner.next_iter(problem, state)
+    }
+    fn terminate(&mut self, state: &St) -> TerminationStatus {
+        match self.max_evals {
+            Some(m) if state.get_iter() >= m => {
+                TerminationStatus::Terminated(TerminationReason::MaxItersReached)
+            }
+            _ => TerminationStatus::NotTerminated,
+        }
+    }
+}
+
 /// argmin's L-BFGS with our stopping rules (argmin's own are absolute and set to 0).
 struct Lbfgs {
-    inner: LBFGS<Ls, Vec<f64>, Vec<f64>, f64>,
+    inner: LBFGS<BoundedLineSearch, Vec<f64>, Vec<f64>, f64>,
     scale: f64,
     grad_tol: f64,
     rel_tol: f64,
@@ -137,7 +188,7 @@ struct Lbfgs {
 
 impl<O> Solver<O, St> for Lbfgs
 where
-    LBFGS<Ls, Vec<f64>, Vec<f64>, f64>: Solver<O, St>,
+    LBFGS<BoundedLineSearch, Vec<f64>, Vec<f64>, f64>: Solver<O, St>,
 {
     fn name(&self) -> &str {
         "L-BFGS (vicpilco stopping rules)"
@@ -219,7 +270,10 @@ where
             last: RefCell::new(Some(seed)),
             evals: Cell::new(0),
         };
-        let linesearch = MoreThuenteLineSearch::new();
+        let linesearch = BoundedLineSearch {
+            inner: MoreThuenteLineSearch::new(),
+            max_evals: opts.max_line_search_evals,
+        };
         let inner = LBFGS::new(linesearch, opts.memory.max(1))
             .with_tolerance_grad(0.0)
             .and_then(|s| s.with_tolerance_cost(0.0))
@@ -318,6 +372,7 @@ mod tests {
             grad_tol: 1e-8,
             rel_tol: 0.0,
             memory: 10,
+            max_line_search_evals: None,
         };
         let r = minimize(&mut rosenbrock, vec![-1.2, 1.0], &opts).unwrap();
         assert!(
@@ -342,6 +397,7 @@ mod tests {
             grad_tol: 1e-8,
             rel_tol: 0.0,
             memory: 5,
+            max_line_search_evals: None,
         };
         let r = minimize(&mut f, vec![-10.0], &opts).unwrap();
         assert!((r.x[0] - 3.0).abs() < 1e-6, "{r:?}");
@@ -355,6 +411,7 @@ mod tests {
             grad_tol: 1e-6,
             rel_tol: 1e-6,
             memory: 5,
+            max_line_search_evals: None,
         };
         assert!(minimize(&mut f, vec![0.0], &opts).is_none());
     }
