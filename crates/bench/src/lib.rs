@@ -170,6 +170,7 @@ impl W1 {
                 rows_to_mat(&self.cost_W).as_ref(),
                 &self.cost_target,
             )?),
+            cost_angles: vec![],
             w_mean: 1.0,
             w_std: 0.0,
             energy: None,

@@ -8,19 +8,25 @@
 //! charged (PILCO's `value`). The reverse sweep visits each step once, so a value+gradient
 //! costs a small constant times a value, whatever the number of policy parameters.
 
+use crate::joint::{Joint, JointBar};
 use crate::step::{Predictor, StepTape};
 use crate::LearnError;
 use faer::Mat;
 use rayon::prelude::*;
 use vicpilco_pilco::cost::{CostSum, EnergyCost};
 use vicpilco_pilco::policy::Policy;
+use vicpilco_pilco::squash::{SinesCache, TrigAug};
 use vicpilco_pilco::{CostBar, GaussianBar};
 
 /// The immediate cost and the discounting of the return.
 #[derive(Clone, Debug)]
 pub struct ReturnSpec {
-    /// Sum of saturating costs on the state (None: no state cost).
+    /// Sum of saturating costs on the state (None: no state cost). With `cost_angles`
+    /// non-empty, the costs see the augmented state `[x; sin θ, cos θ per angle]` (PILCO's
+    /// pendulum and cart-pole costs on the pendulum tip).
     pub state_cost: Option<CostSum>,
+    /// State dimensions augmented with their sine and cosine before the state cost.
+    pub cost_angles: Vec<usize>,
     /// w1: weight of `E[c]`.
     pub w_mean: f64,
     /// w2: weight of `std[c]`; negative rewards exploration.
@@ -61,9 +67,44 @@ pub struct ValueOut {
 /// Return, its gradient (when asked) and the predicted trajectory from one start.
 type StartValue = (f64, Option<Vec<f64>>, Vec<PredictedStep>);
 
+/// The state cost's input: the state, or the state with sine/cosine of its angles appended.
+struct CostInput {
+    joint: Joint,
+    trig: Option<(Mat<f64>, SinesCache)>,
+}
+
+impl CostInput {
+    fn new(trig: Option<&TrigAug>, m: &[f64], s: &Mat<f64>) -> Self {
+        let mut joint = Joint::new(m.to_vec(), s.clone());
+        let trig = trig.map(|tr| {
+            let (mo, cache) = tr.forward(m, s.as_ref());
+            joint.append(&(0..m.len()).collect::<Vec<_>>(), &mo);
+            (mo.v, cache)
+        });
+        Self { joint, trig }
+    }
+
+    /// Adjoint of the state from the adjoint of the cost input.
+    fn backward(&self, trig: Option<&TrigAug>, bar: GaussianBar) -> GaussianBar {
+        let (Some(tr), Some((c, cache))) = (trig, &self.trig) else {
+            return bar;
+        };
+        let d0 = tr.n_inputs();
+        let all: Vec<usize> = (0..d0).collect();
+        let mut zbar = JointBar {
+            mean: bar.mean,
+            cov: bar.cov,
+        };
+        let mb = zbar.pop_append(&self.joint, &all, c.as_ref());
+        let gb = tr.backward(cache, &mb);
+        zbar.add_marginal(&all, &gb);
+        zbar.into_gaussian_bar()
+    }
+}
+
 struct StepRecord<C> {
     tape: StepTape<C>,
-    cost_cache: Option<vicpilco_pilco::cost::CostSumCache>,
+    cost_cache: Option<(vicpilco_pilco::cost::CostSumCache, CostInput)>,
     energy_cache: Option<vicpilco_pilco::cost::EnergyCache>,
     std: f64,
 }
@@ -78,6 +119,15 @@ fn one_start<P: Policy>(
 where
     P::Cache: Send,
 {
+    let trig = if spec.cost_angles.is_empty() {
+        None
+    } else {
+        Some(TrigAug::new(
+            m0.len(),
+            &spec.cost_angles,
+            &vec![1.0; spec.cost_angles.len()],
+        )?)
+    };
     let mut m = m0.to_vec();
     let mut s = s0.clone();
     let mut j = 0.0;
@@ -88,8 +138,9 @@ where
         let disc = spec.gamma.powi(t as i32 + 1);
         let (cost_mean, cost_var, cost_cache) = match &spec.state_cost {
             Some(c) => {
-                let (cm, cache) = c.forward(&out.next_mean, out.next_cov.as_ref());
-                (cm.mean, cm.var, Some(cache))
+                let aug = CostInput::new(trig.as_ref(), &out.next_mean, &out.next_cov);
+                let (cm, cache) = c.forward(&aug.joint.mean, aug.joint.cov.as_ref());
+                (cm.mean, cm.var, Some((cache, aug)))
             }
             None => (0.0, 0.0, None),
         };
@@ -140,13 +191,13 @@ where
     for t in (0..spec.horizon).rev() {
         let rec = &records[t];
         let disc = spec.gamma.powi(t as i32 + 1);
-        if let (Some(c), Some(cache)) = (&spec.state_cost, &rec.cost_cache) {
+        if let (Some(c), Some((cache, aug))) = (&spec.state_cost, &rec.cost_cache) {
             let var_bar = if rec.std > 0.0 {
                 spec.w_std / (2.0 * rec.std)
             } else {
                 0.0
             };
-            let gb = c.backward(
+            let gb_aug = c.backward(
                 cache,
                 &CostBar {
                     mean: disc * spec.w_mean,
@@ -154,6 +205,7 @@ where
                     v: None,
                 },
             );
+            let gb = aug.backward(trig.as_ref(), gb_aug);
             for k in 0..d0 {
                 next_bar.mean[k] += gb.mean[k];
                 for l in 0..d0 {

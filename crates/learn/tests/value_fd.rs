@@ -50,6 +50,8 @@ struct Variant {
     energy: bool,
     gamma: f64,
     starts: usize,
+    /// Angles augmented before the state cost (a cost on their sine and cosine is added).
+    cost_angles: Vec<usize>,
 }
 
 fn check(v: Variant, seed: u64) {
@@ -91,8 +93,20 @@ fn check(v: Variant, seed: u64) {
             .unwrap(),
         );
     }
+    if !v.cost_angles.is_empty() {
+        costs.push(
+            SaturatingCost::new(
+                &[d0, d0 + 1],
+                Mat::from_fn(2, 2, |i, j| if i == j { 1.5 } else { 0.2 }).as_ref(),
+                &[0.0, -1.0],
+            )
+            .unwrap(),
+        );
+    }
+    let n_cost_dims = d0 + 2 * v.cost_angles.len();
     let ret = ReturnSpec {
-        state_cost: Some(CostSum::new(d0, costs).unwrap()),
+        state_cost: Some(CostSum::new(n_cost_dims, costs).unwrap()),
+        cost_angles: v.cost_angles.clone(),
         w_mean: 1.0,
         w_std: v.w_std,
         energy: v
@@ -186,6 +200,7 @@ fn linear_policy_plain() {
             energy: false,
             gamma: 1.0,
             starts: 1,
+            cost_angles: vec![],
         },
         1,
     );
@@ -209,6 +224,7 @@ fn linear_policy_saturated_mixed_targets_energy() {
             energy: true,
             gamma: 0.9,
             starts: 1,
+            cost_angles: vec![],
         },
         2,
     );
@@ -218,7 +234,7 @@ fn linear_policy_saturated_mixed_targets_energy() {
 fn rbf_policy_nonnegative_squash_angle() {
     check(
         Variant {
-            name: "rbf, partial non-negative squash, angle",
+            name: "rbf, partial non-negative squash, angle in dynamics and cost",
             rbf: true,
             squash: Some(vec![
                 SatRange::Bounded {
@@ -235,6 +251,7 @@ fn rbf_policy_nonnegative_squash_angle() {
             energy: false,
             gamma: 1.0,
             starts: 1,
+            cost_angles: vec![2],
         },
         3,
     );
@@ -264,6 +281,7 @@ fn rbf_policy_time_prior_mean_energy_two_starts() {
             energy: true,
             gamma: 1.0,
             starts: 2,
+            cost_angles: vec![],
         },
         4,
     );
@@ -284,6 +302,7 @@ fn rbf_policy_unsquashed_absolute() {
             energy: false,
             gamma: 1.0,
             starts: 1,
+            cost_angles: vec![],
         },
         5,
     );

@@ -71,6 +71,7 @@ where
         .map_err(|e| compute_err(case, e))?;
     let ret = ReturnSpec {
         state_cost: Some(cost),
+        cost_angles: vec![],
         w_mean: 1.0,
         w_std: 0.0,
         energy: None,
