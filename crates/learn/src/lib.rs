@@ -3,9 +3,13 @@
 //! * [`joint`]: the joint Gaussian of a step, grown block by block, and its adjoint;
 //! * [`step`]: one prediction step (state → policy → squashing → GP → next state), forward and
 //!   backward;
-//! * [`value`]: the expected return over a horizon and `dJ/dψ` by one reverse sweep.
+//! * [`value`]: the expected return over a horizon and `dJ/dψ` by one reverse sweep;
+//! * [`data`]: roll-outs and the GP training set built from them;
+//! * [`outer`]: the learning loop over an [`vicpilco_env::Environment`].
 
+pub mod data;
 pub mod joint;
+pub mod outer;
 pub mod step;
 pub mod value;
 
@@ -22,4 +26,6 @@ pub enum LearnError {
     Gp(#[from] vicpilco_gp::GpError),
     #[error(transparent)]
     Pilco(#[from] vicpilco_pilco::PilcoError),
+    #[error("system: {0}")]
+    Env(String),
 }

@@ -1,0 +1,113 @@
+//! Recorded roll-outs and the GP training set built from them.
+
+use crate::step::{StepSpec, Target};
+use faer::Mat;
+use vicpilco_env::StepInfo;
+use vicpilco_gp::Hyper;
+use vicpilco_pilco::squash::TrigAug;
+
+/// One episode on the system.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct Rollout {
+    /// H+1 noisy observations, the first from `reset`.
+    pub observations: Vec<Vec<f64>>,
+    /// H actions (after squashing: what the system received).
+    pub actions: Vec<Vec<f64>>,
+    /// H+1 noise-free states (from the simulator; equal to the observations on a robot that
+    /// cannot tell).
+    pub true_states: Vec<Vec<f64>>,
+    /// Per step: flags (e.g. `in_hole`) and named values the system reported.
+    #[serde(skip)]
+    pub infos: Vec<StepInfo>,
+    /// Whether this roll-out's transitions were added to the GP training set.
+    pub used_for_training: bool,
+}
+
+impl Rollout {
+    pub fn len(&self) -> usize {
+        self.actions.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.actions.is_empty()
+    }
+}
+
+/// The vector `[x; sin θ, cos θ per angle; time]` the policy and the GP inputs index into.
+pub fn augment(spec: &StepSpec, trig: Option<&TrigAug>, x: &[f64], t: usize) -> Vec<f64> {
+    let mut a = x.to_vec();
+    if let Some(tr) = trig {
+        a.extend(tr.apply(x));
+    }
+    if spec.time_input {
+        a.push(t as f64 * spec.dt);
+    }
+    a
+}
+
+/// GP training inputs `[aug(x_t)[dyn_inputs]; u_t]` and targets (`x_{t+1} − x_t` for relative
+/// dimensions, `x_{t+1}` for absolute ones, each minus the prior mean shift `r_k(t)`).
+pub fn training_set(
+    spec: &StepSpec,
+    rollouts: &[Rollout],
+    prior_shift: Option<&[Vec<f64>]>,
+) -> (Mat<f64>, Mat<f64>) {
+    let trig = (!spec.angles.is_empty()).then(|| {
+        TrigAug::new(spec.state_dim, &spec.angles, &vec![1.0; spec.angles.len()])
+            .expect("angles validated by the predictor")
+    });
+    let mut xs: Vec<Vec<f64>> = Vec::new();
+    let mut ys: Vec<Vec<f64>> = Vec::new();
+    for r in rollouts.iter().filter(|r| r.used_for_training) {
+        for t in 0..r.len() {
+            let aug = augment(spec, trig.as_ref(), &r.observations[t], t);
+            let mut input: Vec<f64> = spec.dyn_inputs.iter().map(|&i| aug[i]).collect();
+            input.extend_from_slice(&r.actions[t]);
+            let target = (0..spec.state_dim)
+                .map(|k| {
+                    let next = r.observations[t + 1][k];
+                    let base = if spec.targets[k] == Target::Relative {
+                        r.observations[t][k]
+                    } else {
+                        0.0
+                    };
+                    let shift = prior_shift.and_then(|s| s.get(t)).map_or(0.0, |s| s[k]);
+                    next - base - shift
+                })
+                .collect();
+            xs.push(input);
+            ys.push(target);
+        }
+    }
+    let d = xs.first().map_or(0, Vec::len);
+    let e = spec.state_dim;
+    (
+        Mat::from_fn(xs.len(), d, |i, j| xs[i][j]),
+        Mat::from_fn(ys.len(), e, |i, j| ys[i][j]),
+    )
+}
+
+/// PILCO's first guess of the dynamics hyper-parameters: length-scales = input standard
+/// deviations, signal std = target std, noise std = target std / 10.
+pub fn initial_hyper(inputs: &Mat<f64>, targets: &Mat<f64>) -> Vec<Hyper> {
+    let std = |m: &Mat<f64>, c: usize| -> f64 {
+        let n = m.nrows() as f64;
+        let mean = (0..m.nrows()).map(|i| m[(i, c)]).sum::<f64>() / n;
+        let var = (0..m.nrows())
+            .map(|i| (m[(i, c)] - mean).powi(2))
+            .sum::<f64>()
+            / (n - 1.0).max(1.0);
+        // A constant column (e.g. a saturated action) would give log 0.
+        var.sqrt().max(1e-6)
+    };
+    let log_ls: Vec<f64> = (0..inputs.ncols()).map(|c| std(inputs, c).ln()).collect();
+    (0..targets.ncols())
+        .map(|e| {
+            let sy = std(targets, e);
+            Hyper {
+                log_ls: log_ls.clone(),
+                log_sf: sy.ln(),
+                log_sn: (sy / 10.0).ln(),
+            }
+        })
+        .collect()
+}
