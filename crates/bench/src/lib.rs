@@ -187,3 +187,97 @@ impl W1 {
         })
     }
 }
+
+/// Median wall times of the W1 operations (bench README, "Timed operations").
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct W1Timings {
+    pub forward_s: f64,
+    pub value_grad_s: f64,
+    pub train_s: f64,
+    #[serde(rename = "J")]
+    pub j: f64,
+    /// `‖dJ/d(policy inputs, targets)‖₂` (reference 149.55171269).
+    pub grad_norm_inputs_targets: f64,
+    /// Final penalised negative log marginal likelihood per output after training.
+    pub train_nlml: Vec<f64>,
+    pub repetitions: usize,
+    pub threads: usize,
+    /// Peak resident memory of the process (VmHWM), MB, when the OS reports it.
+    pub peak_memory_mb: Option<f64>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Peak resident set size from `/proc/self/status` (Linux), MB.
+pub fn peak_memory_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}
+
+impl W1 {
+    /// Time forward, value+gradient and training: one warm-up call each, then the median of
+    /// `reps` repetitions. Training uses PILCO's hypCurb penalty, at most 100 L-BFGS
+    /// iterations per output, gradient-norm and relative-change tolerances 1e-6.
+    pub fn time(&self, reps: usize) -> Result<W1Timings, Box<dyn std::error::Error + Send + Sync>> {
+        use std::time::Instant;
+        use vicpilco_learn::value::value;
+        let reps = reps.max(1);
+        let pb = self.problem()?;
+        let pred = pb.predictor()?;
+        let starts = std::slice::from_ref(&pb.start);
+        let warm = value(&pred, &pb.ret, starts, true)?;
+        let grad = warm.grad.as_ref().expect("gradient requested");
+        let n_hyp = (self.state_dim + 2) * self.action_dim;
+        let grad_norm = grad[n_hyp..].iter().map(|g| g * g).sum::<f64>().sqrt();
+        let mut fwd = Vec::with_capacity(reps);
+        let mut vg = Vec::with_capacity(reps);
+        let mut j = warm.j;
+        for _ in 0..reps {
+            let t = Instant::now();
+            j = value(&pred, &pb.ret, starts, false)?.j;
+            fwd.push(t.elapsed().as_secs_f64());
+            let t = Instant::now();
+            value(&pred, &pb.ret, starts, true)?;
+            vg.push(t.elapsed().as_secs_f64());
+        }
+        let (x, y) = (rows_to_mat(&self.X), rows_to_mat(&self.Y));
+        let opts = vicpilco_gp::TrainOptions::default();
+        let init = self.train_init();
+        let (_, report) = vicpilco_gp::train(x.as_ref(), y.as_ref(), &init, &opts)?;
+        let mut tr = Vec::with_capacity(reps);
+        for _ in 0..reps {
+            let t = Instant::now();
+            vicpilco_gp::train(x.as_ref(), y.as_ref(), &init, &opts)?;
+            tr.push(t.elapsed().as_secs_f64());
+        }
+        Ok(W1Timings {
+            forward_s: median(fwd),
+            value_grad_s: median(vg),
+            train_s: median(tr),
+            j,
+            grad_norm_inputs_targets: grad_norm,
+            train_nlml: report.objectives(),
+            repetitions: reps,
+            threads: rayon_threads(),
+            peak_memory_mb: peak_memory_mb(),
+        })
+    }
+}
+
+fn rayon_threads() -> usize {
+    std::env::var("RAYON_NUM_THREADS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .filter(|&n: &usize| n > 0)
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+}

@@ -1,6 +1,7 @@
 //! `vicpilco`: the command-line edge. Library crates return typed errors; this file turns them
 //! into messages and exit codes.
 
+mod bench_cmd;
 mod oracle_cmd;
 
 use clap::{Parser, Subcommand};
@@ -25,6 +26,13 @@ enum Command {
     /// with vicpilco, and prints one row per kind: cases, cases passed, largest relative error.
     /// Kinds vicpilco cannot compute yet are listed as skipped. Exits non-zero if any case fails.
     Oracle(oracle_cmd::Args),
+    /// Time a fixed benchmark workload (../shared/bench): forward prediction of the expected
+    /// return, value + gradient w.r.t. every policy parameter, and GP training.
+    ///
+    /// Prints medians over repetitions after a warm-up, the return J (which must equal the
+    /// workload's reference), and with --json `{"forward_s", "value_grad_s", "train_s", "J"}`
+    /// so other PILCO implementations can be timed side by side on the same numbers.
+    Bench(bench_cmd::Args),
 }
 
 fn main() -> ExitCode {
@@ -38,6 +46,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Oracle(args) => oracle_cmd::run(args),
+        Command::Bench(args) => bench_cmd::run(args).map(|()| ExitCode::SUCCESS),
     };
     match result {
         Ok(code) => code,
