@@ -2,6 +2,7 @@
 //! into messages and exit codes.
 
 mod oracle_cmd;
+mod sim_cmd;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -25,6 +26,13 @@ enum Command {
     /// with vicpilco, and prints one row per kind: cases, cases passed, largest relative error.
     /// Kinds vicpilco cannot compute yet are listed as skipped. Exits non-zero if any case fails.
     Oracle(oracle_cmd::Args),
+    /// Simulate one 10 s peg-in-hole episode of the planar 3-DOF arm under impedance control.
+    ///
+    /// The arm follows the thesis's min-jerk plan (approach the wall, slide to the hole, insert)
+    /// with the given stiffness per 0.1 s step. Writes trace.csv (per control tick), steps.csv
+    /// (per step), summary.json (inserted, final x, max |f|, wall time, real-time factor) and
+    /// plot.png into DIR.
+    Sim(sim_cmd::Args),
 }
 
 fn main() -> ExitCode {
@@ -38,6 +46,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Oracle(args) => oracle_cmd::run(args),
+        Command::Sim(args) => sim_cmd::run(args),
     };
     match result {
         Ok(code) => code,
