@@ -17,19 +17,41 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    anyhow::ensure!(args.workload == "w1", "unknown workload `{}` (known: w1)", args.workload);
-    let w1 = vicpilco_bench::W1::load(&args.file).with_context(|| format!("loading {}", args.file.display()))?;
+    anyhow::ensure!(
+        args.workload == "w1",
+        "unknown workload `{}` (known: w1)",
+        args.workload
+    );
+    let w1 = vicpilco_bench::W1::load(&args.file)
+        .with_context(|| format!("loading {}", args.file.display()))?;
     let t = w1.time(args.reps).map_err(|e| anyhow::anyhow!("{e}"))?;
     if args.json {
         println!("{}", serde_json::to_string(&t)?);
     } else {
-        println!("workload W1 ({}), median of {} after a warm-up, {} threads", args.file.display(), t.repetitions, t.threads);
-        println!("  forward (J over H = {}):   {:.3} s", w1.horizon, t.forward_s);
+        println!(
+            "workload W1 ({}), median of {} after a warm-up, {} threads",
+            args.file.display(),
+            t.repetitions,
+            t.threads
+        );
+        println!(
+            "  forward (J over H = {}):   {:.3} s",
+            w1.horizon, t.forward_s
+        );
         println!("  value + gradient:           {:.3} s", t.value_grad_s);
         println!("  train 6 GPs (hypCurb):      {:.3} s", t.train_s);
         println!("  J = {:.10} (reference 92.6720698716)", t.j);
-        println!("  |dJ/d(inputs, targets)| = {:.8} (reference 149.55171269)", t.grad_norm_inputs_targets);
-        println!("  trained nlml per output: {:?}", t.train_nlml.iter().map(|v| (v * 10.0).round() / 10.0).collect::<Vec<_>>());
+        println!(
+            "  |dJ/d(inputs, targets)| = {:.8} (reference 149.55171269)",
+            t.grad_norm_inputs_targets
+        );
+        println!(
+            "  trained nlml per output: {:?}",
+            t.train_nlml
+                .iter()
+                .map(|v| (v * 10.0).round() / 10.0)
+                .collect::<Vec<_>>()
+        );
         if let Some(m) = t.peak_memory_mb {
             println!("  peak memory: {m:.0} MB");
         }

@@ -3,6 +3,7 @@
 
 mod bench_cmd;
 mod oracle_cmd;
+mod sim_cmd;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -33,6 +34,13 @@ enum Command {
     /// workload's reference), and with --json `{"forward_s", "value_grad_s", "train_s", "J"}`
     /// so other PILCO implementations can be timed side by side on the same numbers.
     Bench(bench_cmd::Args),
+    /// Simulate one 10 s peg-in-hole episode of the planar 3-DOF arm under impedance control.
+    ///
+    /// The arm follows the thesis's min-jerk plan (approach the wall, slide to the hole, insert)
+    /// with the given stiffness per 0.1 s step. Writes trace.csv (per control tick), steps.csv
+    /// (per step), summary.json (inserted, final x, max |f|, wall time, real-time factor) and
+    /// plot.png into DIR.
+    Sim(sim_cmd::Args),
 }
 
 fn main() -> ExitCode {
@@ -47,6 +55,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Oracle(args) => oracle_cmd::run(args),
         Command::Bench(args) => bench_cmd::run(args).map(|()| ExitCode::SUCCESS),
+        Command::Sim(args) => sim_cmd::run(args),
     };
     match result {
         Ok(code) => code,

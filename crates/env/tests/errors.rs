@@ -91,6 +91,9 @@ fn start_out_of_reach() {
             ..
         }
     ));
+    // Inside the wall face (0.25 m deep).
+    let err = e.reset(&[0.9, 0.0, 0.0, 0.0, 0.0, 0.0], 1).unwrap_err();
+    assert!(err.to_string().contains("inside a surface"), "{err}");
     // Not reset yet: stepping is an error, not a panic.
     assert_eq!(e.step(&[100.0, 100.0]).unwrap_err(), EnvError::NotReset);
 }

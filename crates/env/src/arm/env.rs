@@ -14,6 +14,9 @@ use std::collections::BTreeMap;
 /// Names of the observed state entries.
 pub const STATE_NAMES: [&str; 6] = ["x", "y", "xd", "yd", "fx", "fy"];
 
+/// Deepest start inside a surface that `reset` accepts (m); deeper starts are an error.
+pub const START_MAX_PENETRATION: f64 = 1e-3;
+
 /// The planar arm peg-in-hole environment.
 #[derive(Debug)]
 pub struct ArmEnv {
@@ -183,6 +186,18 @@ impl Environment for ArmEnv {
             reason,
         })?;
         let sim = ArmSim::new(&self.cfg, q0, seed)?;
+        let c = sim.contact();
+        if c.w[0].abs().max(c.w[1].abs()) > self.cfg.contact.k_env * START_MAX_PENETRATION {
+            return Err(EnvError::OutOfReach {
+                x: start[0],
+                y: start[1],
+                reason: format!(
+                    "it lies inside a surface (contact force {:.1} N; at most {} m of penetration is allowed)",
+                    c.w[0].hypot(c.w[1]),
+                    START_MAX_PENETRATION
+                ),
+            });
+        }
         let r = *sim.reading();
         self.sim = Some(sim);
         self.steps = 0;

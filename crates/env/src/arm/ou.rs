@@ -125,6 +125,7 @@ mod tests {
             }
         }
         let r1 = num / den;
+        eprintln!("(j) OU: std {sd:.3} vs {expected_sd:.3}, lag-1 {r1:.4} vs {rho:.4}");
         assert!((r1 - rho).abs() < 0.01, "lag-1 {r1} vs {rho}");
         // Clipped: within limits.
         let mut rng = ChaCha8Rng::seed_from_u64(12);

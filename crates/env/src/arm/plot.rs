@@ -34,6 +34,12 @@ fn plot_err(path: &Path, e: impl std::fmt::Display) -> EnvError {
 
 const X_COLOR: RGBColor = RGBColor(31, 119, 180);
 const Y_COLOR: RGBColor = RGBColor(214, 39, 40);
+/// An opaque colour between `c` and white.
+fn lighten(c: RGBColor, f: f64) -> RGBColor {
+    let l = |v: u8| (v as f64 + (255.0 - v as f64) * f).round() as u8;
+    RGBColor(l(c.0), l(c.1), l(c.2))
+}
+
 const WALL: RGBColor = RGBColor(90, 90, 90);
 
 /// Every n-th record so at most ~4000 points are drawn per series.
@@ -176,15 +182,17 @@ fn draw_forces(area: &Area, pts: &[&TickRecord], t_end: f64) -> DrawResult {
     for (i, (name, color)) in [("f_x", X_COLOR), ("f_y", Y_COLOR)].into_iter().enumerate() {
         c.draw_series(LineSeries::new(
             pts.iter().map(|r| (r.t, r.f_meas[i])),
-            color.mix(0.3).stroke_width(1),
+            lighten(color, 0.65).stroke_width(1),
         ))?
         .label(format!("{name} measured"))
         .legend(move |(x, y)| {
-            PathElement::new([(x, y), (x + 20, y)], color.mix(0.3).stroke_width(2))
+            PathElement::new([(x, y), (x + 20, y)], lighten(color, 0.65).stroke_width(2))
         });
         c.draw_series(LineSeries::new(
             pts.iter().map(|r| (r.t, r.f_true[i])),
-            color.stroke_width(2),
+            // 1 px: plotters fills wider lines as polygons, which streak out of the panel on
+            // near-vertical force spikes.
+            color.stroke_width(1),
         ))?
         .label(format!("{name} true"))
         .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2)));

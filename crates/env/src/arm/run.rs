@@ -44,7 +44,7 @@ impl FromStr for StiffnessSource {
                     EnvError::Input(format!("stiffness {s:?}: {p:?} is not a number"))
                 })?;
             }
-            check_stiffness(k, "const")?;
+            check_stiffness(k, "")?;
             Ok(StiffnessSource::Const(k))
         } else if let Some(rest) = s.strip_prefix("ou:") {
             let seed = rest.trim().parse().map_err(|_| {
@@ -68,7 +68,11 @@ fn check_stiffness(k: [f64; 2], at: &str) -> Result<(), EnvError> {
         if !(v.is_finite() && v > 0.0) {
             return Err(EnvError::InvalidAction {
                 kind: "stiffness",
-                field: format!("{name} ({at})"),
+                field: if at.is_empty() {
+                    name.to_string()
+                } else {
+                    format!("{name} ({at})")
+                },
                 value: v,
                 requirement: "> 0 and finite".into(),
             });

@@ -104,6 +104,11 @@ mod tests {
                 .map(|w| (w[0] - mean) * (w[1] - mean))
                 .sum::<f64>()
                 / (var * (nf - 1.0));
+            eprintln!(
+                "(i) std/σ − 1 = {:+.4}, mean/(σ/√n) = {:+.2}, lag-1 ρ = {r1:+.4}",
+                sd / sigma - 1.0,
+                mean / (sigma / nf.sqrt())
+            );
             assert!((sd / sigma - 1.0).abs() < 0.02, "std {sd} vs {sigma}");
             assert!(mean.abs() < 3.0 * sigma / nf.sqrt(), "mean {mean}");
             assert!(r1.abs() < 0.01, "lag-1 {r1}");
