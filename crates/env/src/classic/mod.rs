@@ -382,7 +382,7 @@ pub struct ClassicEnv<P, const N: usize> {
 impl<P: ClassicSystem + Dynamics<N>, const N: usize> ClassicEnv<P, N> {
     /// An environment for `scenario` after [`Scenario::validate`].
     pub fn new(scenario: Scenario<P>) -> Result<Self, EnvError> {
-        assert_eq!(N, P::STATE_DIM, "state length of the environment type");
+        const { assert!(N == P::STATE_DIM, "N must equal the system's STATE_DIM") };
         scenario.validate()?;
         Ok(ClassicEnv {
             scenario,
