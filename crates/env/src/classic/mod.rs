@@ -284,6 +284,50 @@ impl<P: ClassicSystem> Scenario<P> {
         rng.random_range(-self.max_action..self.max_action)
     }
 
+    /// One start state drawn from `N(start_mean, start_cov)` (PILCO's `gaussian(mu0, S0)`):
+    /// `start_mean + L n` with `L` the Cholesky factor of `start_cov` and `n` standard normal
+    /// draws in state order. Errors if `start_cov` is not symmetric positive definite.
+    pub fn sample_start<R: Rng + ?Sized>(&self, rng: &mut R) -> Result<Vec<f64>, EnvError> {
+        let n = self.start_mean.len();
+        let c = &self.start_cov;
+        if c.len() != n || c.iter().any(|r| r.len() != n) {
+            return Err(EnvError::config(
+                "scenario.start_cov",
+                format!("{} rows", c.len()),
+                format!("{n} × {n}"),
+            ));
+        }
+        let mut l = vec![vec![0.0; n]; n];
+        for i in 0..n {
+            for j in 0..=i {
+                if (c[i][j] - c[j][i]).abs() > 1e-12 * (c[i][j].abs() + c[j][i].abs()) {
+                    return Err(EnvError::config(
+                        "scenario.start_cov",
+                        "asymmetric",
+                        "symmetric",
+                    ));
+                }
+                let s = c[i][j] - (0..j).map(|k| l[i][k] * l[j][k]).sum::<f64>();
+                if i == j {
+                    if !(s > 0.0 && s.is_finite()) {
+                        return Err(EnvError::config(
+                            format!("scenario.start_cov[{i}][{i}] (pivot)"),
+                            s,
+                            "> 0 (positive definite)",
+                        ));
+                    }
+                    l[i][i] = s.sqrt();
+                } else {
+                    l[i][j] = s / l[j][j];
+                }
+            }
+        }
+        let e: Vec<f64> = (0..n).map(|_| StandardNormal.sample(rng)).collect();
+        Ok((0..n)
+            .map(|i| self.start_mean[i] + (0..=i).map(|k| l[i][k] * e[k]).sum::<f64>())
+            .collect())
+    }
+
     /// Checks every field that the simulator or the index conventions rely on.
     pub fn validate(&self) -> Result<(), EnvError> {
         let n = P::STATE_DIM;
