@@ -18,7 +18,7 @@
 //!   bit for bit.
 //! * `reset(start, seed)` sets the true state to `start` exactly; drawing `start` from the start
 //!   distribution `N(start_mean, start_cov)` is the caller's job (as PILCO's
-//!   `rollout(gaussian(mu0, S0), …)`).
+//!   `rollout(gaussian(mu0, S0), …)`); [`Scenario::sample_start`] does it.
 //! * Actions: one scalar (torque or force). Wrong length, non-finite, or `|u| > max_action` is
 //!   an [`EnvError`] naming the field; there is no clipping (the learner's sine squashing keeps
 //!   actions within `±max_action`).
