@@ -7,12 +7,15 @@
 //! * [`arm`]: the planar 3-DOF arm of the thesis (§5-2) under simple (SIC) or general (GIC)
 //!   Cartesian impedance control, pushing a point peg against a stiff wall, into a 5 mm hole
 //!   and against an insertion spring. See `crates/env/README.md` for every parameter.
+//! * [`classic`]: PILCO's pendulum and cart-pole swing-up benchmarks with the constants of
+//!   its published scenarios, integrated by RK4 under zero-order hold.
 //!
 //! The crate uses plain fixed-size arrays for the arm (no linear-algebra crate) and allocates
 //! nothing inside the integrator loop.
 #![warn(missing_docs)]
 
 pub mod arm;
+pub mod classic;
 mod environment;
 mod error;
 
