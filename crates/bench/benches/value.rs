@@ -27,15 +27,23 @@ fn bench(c: &mut Criterion) {
             let src = pb.policy.centres().to_owned();
             let tgt = pb.policy.targets().to_owned();
             let n = src.nrows();
-            let centres = Mat::from_fn(n_basis, src.ncols(), |i, k| src[(i % n, k)] + 0.01 * (i / n) as f64);
+            let centres = Mat::from_fn(n_basis, src.ncols(), |i, k| {
+                src[(i % n, k)] + 0.01 * (i / n) as f64
+            });
             let targets = Mat::from_fn(n_basis, tgt.ncols(), |i, k| tgt[(i % n, k)]);
-            let log_ls = Mat::from_fn(src.ncols(), tgt.ncols(), |k, a| pb.policy.hyp()[a].log_ls[k]);
+            let log_ls = Mat::from_fn(src.ncols(), tgt.ncols(), |k, a| {
+                pb.policy.hyp()[a].log_ls[k]
+            });
             pb.policy = RbfPolicy::new(centres, targets, log_ls.as_ref(), 100.0).unwrap();
         }
         let pred = pb.predictor().unwrap();
         let starts = std::slice::from_ref(&pb.start);
-        g.bench_function(format!("value_nc{n_basis}"), |b| b.iter(|| value(&pred, &pb.ret, black_box(starts), false).unwrap()));
-        g.bench_function(format!("value_grad_nc{n_basis}"), |b| b.iter(|| value(&pred, &pb.ret, black_box(starts), true).unwrap()));
+        g.bench_function(format!("value_nc{n_basis}"), |b| {
+            b.iter(|| value(&pred, &pb.ret, black_box(starts), false).unwrap())
+        });
+        g.bench_function(format!("value_grad_nc{n_basis}"), |b| {
+            b.iter(|| value(&pred, &pb.ret, black_box(starts), true).unwrap())
+        });
     }
     g.finish();
 }

@@ -3,6 +3,7 @@
 
 mod bench_cmd;
 mod oracle_cmd;
+mod run_cmd;
 mod sim_cmd;
 
 use clap::{Parser, Subcommand};
@@ -21,6 +22,13 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Run a learning experiment: PILCO's pendulum or cart-pole swing-up.
+    ///
+    /// Random initial roll-out(s), then per policy update: train the GP dynamics model, optimise
+    /// the policy on the predicted return, roll it out. Writes DIR/summary.json (per update:
+    /// predicted and recorded return, success, interaction/training/optimisation time;
+    /// solved_at_episode) and DIR/rollouts.json (every roll-out).
+    Run(run_cmd::Args),
     /// Check vicpilco's maths against reference values from the original PILCO MATLAB code.
     ///
     /// Loads every case file under DIR (one folder per kind: gp0, gp1, ...), recomputes each
@@ -53,6 +61,7 @@ fn main() -> ExitCode {
         .init();
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Run(args) => run_cmd::run(args).map(|()| ExitCode::SUCCESS),
         Command::Oracle(args) => oracle_cmd::run(args),
         Command::Bench(args) => bench_cmd::run(args).map(|()| ExitCode::SUCCESS),
         Command::Sim(args) => sim_cmd::run(args),

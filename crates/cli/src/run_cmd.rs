@@ -1,0 +1,102 @@
+use anyhow::Context;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
+use vicpilco_learn::outer::{EpisodeRecord, LoopObserver, Phase};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Experiment: pendulum or cartpole.
+    name: String,
+    /// Master seed: the same seed reproduces the run.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Run directory (summary.json, rollouts.json); default runs/<name>-seed<S>.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Number of policy updates (default: the experiment's).
+    #[arg(long)]
+    episodes: Option<usize>,
+}
+
+/// A progress bar over policy updates showing the phase, the current objective J and ETA.
+struct Progress {
+    bar: ProgressBar,
+    last_j: f64,
+}
+
+impl LoopObserver for Progress {
+    fn phase(&mut self, episode: usize, phase: Phase) {
+        let what = match phase {
+            Phase::InitialRollout => "initial roll-out",
+            Phase::Train => "train GP",
+            Phase::Optimise => "optimise policy",
+            Phase::Rollout => "roll-out",
+        };
+        self.bar
+            .set_message(format!("episode {episode}: {what}, J = {:.3}", self.last_j));
+    }
+    fn objective(&mut self, episode: usize, j: f64) {
+        self.last_j = j;
+        self.bar
+            .set_message(format!("episode {episode}: optimise policy, J = {j:.3}"));
+    }
+    fn episode_done(&mut self, r: &EpisodeRecord) {
+        self.bar.inc(1);
+        let line = format!(
+            "episode {:>2}: predicted {:.2} ± {:.2}, recorded {:.2}, {} (train {:.1} s, optimise {:.1} s, {} evaluations)",
+            r.index,
+            r.predicted_return_mean,
+            r.predicted_return_std,
+            r.recorded_return,
+            if r.success { "success" } else { "no success" },
+            r.train_s,
+            r.optimise_s,
+            r.evaluations
+        );
+        // A hidden bar (stderr not a terminal) drops println; the log line must not be lost.
+        if self.bar.is_hidden() {
+            eprintln!("{line}");
+        } else {
+            self.bar.println(line);
+        }
+    }
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let out = args
+        .out
+        .unwrap_or_else(|| PathBuf::from(format!("runs/{}-seed{}", args.name, args.seed)));
+    let opts = vicpilco_experiments::RunOptions {
+        seed: args.seed,
+        out: out.clone(),
+        episodes: args.episodes,
+    };
+    let total = args.episodes.unwrap_or(match args.name.as_str() {
+        "pendulum" => vicpilco_env::classic::PendulumScenario::default().policy_updates,
+        "cartpole" => vicpilco_env::classic::CartPoleScenario::default().policy_updates,
+        _ => 0,
+    });
+    let bar = ProgressBar::new(total as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} updates, ETA {eta}  {msg}")
+            .expect("valid template"),
+    );
+    let mut progress = Progress {
+        bar,
+        last_j: f64::NAN,
+    };
+    let summary = vicpilco_experiments::run(&args.name, &opts, &mut progress)
+        .with_context(|| format!("running `{}`", args.name))?;
+    progress.bar.finish_and_clear();
+    println!(
+        "{}: seed {}, {} updates, solved at update {}, {:.1} s of interaction, {:.0} s wall; wrote {}",
+        summary.experiment,
+        summary.seed,
+        summary.episodes.len(),
+        summary.solved_at_episode.map_or("never".to_string(), |e| e.to_string()),
+        summary.interaction_s,
+        summary.wall_s,
+        out.join("summary.json").display()
+    );
+    Ok(())
+}
