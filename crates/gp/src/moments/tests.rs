@@ -98,13 +98,23 @@ fn unpack(v: &[f64], d: usize) -> (Vec<f64>, Mat<f64>) {
     (m, s)
 }
 
-fn check_input_vjp(variance_model: bool, n: usize, d: usize, e: usize, seed: u64) {
+#[derive(Clone, Copy, Debug)]
+enum Flavour {
+    Full,
+    Mean,
+    Sparse,
+}
+
+fn check_input_vjp(flavour: Flavour, n: usize, d: usize, e: usize, seed: u64) {
     let mut rng = Lcg(seed);
     let gp = random_gp(&mut rng, n, d, e);
-    let mm = if variance_model {
-        MmModel::with_uncertainty(&gp)
-    } else {
-        MmModel::mean_only(&gp)
+    let inducing = Mat::from_fn(n / 2 + 1, d, |_, _| rng.normal());
+    let sparse =
+        crate::SparseGpModel::new(gp.inputs(), gp.targets(), gp.hyp().to_vec(), inducing).unwrap();
+    let mm = match flavour {
+        Flavour::Full => MmModel::with_uncertainty(&gp),
+        Flavour::Mean => MmModel::mean_only(&gp),
+        Flavour::Sparse => MmModel::sparse(&sparse),
     };
     let m: Vec<f64> = (0..d).map(|_| 0.5 * rng.normal()).collect();
     let s = random_spd(&mut rng, d, 0.3);
@@ -137,21 +147,28 @@ fn check_input_vjp(variance_model: bool, n: usize, d: usize, e: usize, seed: u64
             }
         }
         let err = rel_diff(analytic, numeric, 1e-8);
-        assert!(err < 1e-6, "N={n} D={d} E={e} model={variance_model} trial {trial}: analytic {analytic} numeric {numeric} rel {err}");
+        assert!(err < 1e-6, "N={n} D={d} E={e} {flavour:?} trial {trial}: analytic {analytic} numeric {numeric} rel {err}");
     }
 }
 
 #[test]
 fn full_gp_input_vjp_matches_finite_differences() {
     for (n, d, e, seed) in [(5, 1, 1, 1), (20, 2, 3, 2), (40, 4, 2, 3), (30, 7, 6, 4)] {
-        check_input_vjp(true, n, d, e, seed);
+        check_input_vjp(Flavour::Full, n, d, e, seed);
+    }
+}
+
+#[test]
+fn sparse_gp_input_vjp_matches_finite_differences() {
+    for (n, d, e, seed) in [(8, 1, 1, 41), (30, 3, 2, 42), (40, 6, 4, 43)] {
+        check_input_vjp(Flavour::Sparse, n, d, e, seed);
     }
 }
 
 #[test]
 fn mean_gp_input_vjp_matches_finite_differences() {
     for (n, d, e, seed) in [(5, 1, 1, 5), (20, 3, 2, 6), (30, 6, 4, 7)] {
-        check_input_vjp(false, n, d, e, seed);
+        check_input_vjp(Flavour::Mean, n, d, e, seed);
     }
 }
 
