@@ -31,12 +31,16 @@
 //! * `∂/∂log ℓ_d = ℓ_d⁻² [Σ_mn E_mn (u_md − x_nd)² + Σ_ij F_ij (u_id − u_jd)²]`,
 //! * `∂/∂log σ_f = 2 (Σ E + Σ F + σ_f² Σ_n C̄_nn)`, `∂/∂log σ_n = 2 σ_n² Σ_n C̄_nn`.
 //!
-//! Cost per evaluation: about six M²N products/triangular solves plus O(MND).
+//! `T Vᵀ = V diag(δ − g) Vᵀ + I − A⁻¹ − (Vα)(Vα)ᵀ` (because `A⁻¹ V Γ⁻¹ Vᵀ = I − A⁻¹`) is
+//! symmetric, so only its lower triangle is multiplied out.
+//!
+//! Cost per evaluation: one M×N triangular solve and a half product for the factorisation,
+//! two solves for `A⁻¹V`, a half product for `T Vᵀ` and one solve for `K̄_mn` (≈ 6·M²N
+//! flops), plus O(M³ + MND).
 
 use crate::error::{GpError, Result};
 use crate::kernel::{Hyper, Kernel, SquaredExponential};
 use crate::linalg::{symmetrise, Chol, JitterPolicy};
-use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
 
 /// The fixed ridge PILCO adds to `K_mm` wherever it appears (`fitc.m`, `gp1d.m`).
@@ -135,16 +139,8 @@ pub(crate) fn factor(
         vt.col_as_slice_mut(j).iter_mut().for_each(|a| *a *= s);
     }
     let mut a = Mat::<f64>::identity(m, m);
-    matmul(
-        a.as_mut(),
-        Accum::Add,
-        vt.as_ref(),
-        vt.transpose(),
-        1.0,
-        Par::Seq,
-    );
+    lower_product_add(&mut a, vt.as_ref(), vt.as_ref());
     drop(vt);
-    symmetrise(&mut a);
     let la = Chol::new(a.as_ref(), "I + V Γ⁻¹ Vᵀ (FITC)")?;
 
     let yg: Vec<f64> = y.iter().zip(&gamma).map(|(a, g)| a / g).collect();
@@ -174,6 +170,28 @@ pub(crate) fn factor(
         alpha,
         value,
     })
+}
+
+/// `C ← C + A Bᵀ` where the product is known to be symmetric: only the lower triangle is
+/// computed (half the flops), then mirrored. `C` must be symmetric on entry.
+fn lower_product_add(c: &mut Mat<f64>, a: MatRef<'_, f64>, b: MatRef<'_, f64>) {
+    use faer::linalg::matmul::triangular::{matmul as tri_matmul, BlockStructure};
+    tri_matmul(
+        c.as_mut(),
+        BlockStructure::TriangularLower,
+        Accum::Add,
+        a,
+        BlockStructure::Rectangular,
+        b.transpose(),
+        BlockStructure::Rectangular,
+        1.0,
+        Par::Seq,
+    );
+    for j in 0..c.ncols() {
+        for i in 0..j {
+            c[(i, j)] = c[(j, i)];
+        }
+    }
 }
 
 /// `A b` for an M×N matrix stored column-major.
@@ -224,36 +242,39 @@ pub(crate) fn gradient(
 ) -> FitcEval {
     let (m, n, d) = (u.nrows(), x.nrows(), x.ncols());
     // R = A⁻¹ V.
-    let mut t = f.la.solve(f.v.as_ref());
+    let r = f.la.solve(f.v.as_ref());
+    let t_vec = mat_vec(f.v.as_ref(), &f.alpha); // V α
     let mut diag_sum = 0.0; // Σ_n C̄_nn
-    let va = mat_vec(f.v.as_ref(), &f.alpha);
+                            // W = V diag(δ − g), later turned into T = W + R diag(g) − (Vα) αᵀ in place.
+    let mut w = f.v.clone();
+    let mut g = vec![0.0; n];
     for j in 0..n {
-        let g = 1.0 / f.gamma[j];
-        let vj = f.v.col_as_slice(j);
-        let rj = t.col_as_slice_mut(j);
-        let s: f64 = vj.iter().zip(rj.iter()).map(|(p, q)| p * q).sum();
+        g[j] = 1.0 / f.gamma[j];
+        let s: f64 =
+            f.v.col_as_slice(j)
+                .iter()
+                .zip(r.col_as_slice(j))
+                .map(|(p, q)| p * q)
+                .sum();
         let a = f.alpha[j];
-        let delta = g * g * s + a * a;
-        diag_sum += 0.5 * (g - g * g * s - a * a);
-        // T[:, j] = V[:, j](δ − g) + R[:, j] g − (Vα) α_j
-        for ((r, v), w) in rj.iter_mut().zip(vj).zip(&va) {
-            *r = v * (delta - g) + *r * g - w * a;
-        }
+        let delta = g[j] * g[j] * s + a * a;
+        diag_sum += 0.5 * (g[j] - g[j] * g[j] * s - a * a);
+        let scale = delta - g[j];
+        w.col_as_slice_mut(j).iter_mut().for_each(|v| *v *= scale);
     }
-    // S = T Vᵀ, then K̄_mm = −½ L⁻ᵀ S L⁻¹.
-    let mut s = Mat::zeros(m, m);
-    matmul(
-        s.as_mut(),
-        Accum::Replace,
-        t.as_ref(),
-        f.v.transpose(),
-        1.0,
-        Par::Seq,
-    );
+    // S = T Vᵀ = V diag(δ − g) Vᵀ + (I − A⁻¹) − (Vα)(Vα)ᵀ, since A⁻¹ V Γ⁻¹ Vᵀ = I − A⁻¹.
+    let mut s = f.la.inverse();
+    for j in 0..m {
+        for (i, v) in s.col_as_slice_mut(j).iter_mut().enumerate() {
+            *v = -*v - t_vec[i] * t_vec[j];
+        }
+        s[(j, j)] += 1.0;
+    }
+    lower_product_add(&mut s, w.as_ref(), f.v.as_ref());
+    // K̄_mm = −½ L⁻ᵀ S L⁻¹.
     f.l.solve_lt_in_place(s.as_mut());
     let mut kbar_mm = s.transpose().to_owned();
     f.l.solve_lt_in_place(kbar_mm.as_mut());
-    // kbar_mm now holds (L⁻ᵀ S L⁻¹)ᵀ, symmetric up to rounding; K̄_mm is −½ of it.
     symmetrise(&mut kbar_mm);
     for j in 0..m {
         kbar_mm
@@ -262,8 +283,15 @@ pub(crate) fn gradient(
             .for_each(|v| *v *= -0.5);
     }
     // K̄_mn = L⁻ᵀ T.
-    f.l.solve_lt_in_place(t.as_mut());
-    let kbar_mn = t;
+    for j in 0..n {
+        let a = f.alpha[j];
+        let rj = r.col_as_slice(j);
+        for ((v, rr), tv) in w.col_as_slice_mut(j).iter_mut().zip(rj).zip(&t_vec) {
+            *v += rr * g[j] - tv * a;
+        }
+    }
+    f.l.solve_lt_in_place(w.as_mut());
+    let kbar_mn = w;
 
     let il2 = h.inv_ls2();
     let ur: Vec<f64> = (0..m)
