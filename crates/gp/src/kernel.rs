@@ -11,7 +11,7 @@
 //! prediction go through the [`Kernel`] trait so that other stationary kernels (Matérn) can be
 //! added without touching their callers.
 
-use faer::{Mat, MatRef};
+use faer::{Mat, MatMut, MatRef};
 use serde::{Deserialize, Serialize};
 
 /// Log hyper-parameters of one output: ARD length-scales, signal and noise standard deviation.
@@ -89,6 +89,11 @@ pub trait Kernel: Send + Sync + std::fmt::Debug {
         k
     }
 
+    /// `K(X, X)` (no noise) written into `out` (N×N), for loops that reuse one buffer.
+    fn gram_into(&self, h: &Hyper, x: MatRef<'_, f64>, mut out: MatMut<'_, f64>) {
+        out.copy_from(self.gram(h, x));
+    }
+
     /// `K(X1, X2)`, N1×N2.
     fn cross(&self, h: &Hyper, x1: MatRef<'_, f64>, x2: MatRef<'_, f64>) -> Mat<f64> {
         let r1: Vec<Vec<f64>> = (0..x1.nrows()).map(|i| row(x1, i)).collect();
@@ -126,7 +131,14 @@ impl Kernel for SquaredExponential {
     }
 
     fn gram(&self, h: &Hyper, x: MatRef<'_, f64>) -> Mat<f64> {
+        let mut k = Mat::zeros(x.nrows(), x.nrows());
+        self.gram_into(h, x, k.as_mut());
+        k
+    }
+
+    fn gram_into(&self, h: &Hyper, x: MatRef<'_, f64>, mut k: MatMut<'_, f64>) {
         let (n, d) = (x.nrows(), x.ncols());
+        assert_eq!((k.nrows(), k.ncols()), (n, n), "gram_into: output size");
         let il: Vec<f64> = h.log_ls.iter().map(|l| (-l).exp()).collect();
         // Scale once so the pair loop is a plain squared distance.
         let xs: Vec<f64> = (0..n)
@@ -134,7 +146,6 @@ impl Kernel for SquaredExponential {
             .map(|(i, c)| x[(i, c)] * il[c])
             .collect();
         let sf2 = h.sf2();
-        let mut k = Mat::zeros(n, n);
         for i in 0..n {
             let xi = &xs[i * d..(i + 1) * d];
             k[(i, i)] = sf2;
@@ -146,7 +157,6 @@ impl Kernel for SquaredExponential {
                 k[(j, i)] = v;
             }
         }
-        k
     }
 
     fn gram_grad_contract(
@@ -159,20 +169,30 @@ impl Kernel for SquaredExponential {
         let (n, d) = (x.nrows(), x.ncols());
         let il2 = h.inv_ls2();
         // ∂K_ij/∂log ℓ_c = K_ij (x_ic - x_jc)² / ℓ_c²;  ∂K_ij/∂log σ_f = 2 K_ij.
-        let mut out = vec![0.0; d + 1];
+        // Rows copied once to contiguous memory; G and K read down their columns (the upper
+        // triangle, equal to the lower one for symmetric G), so the pair loop has no strided
+        // or bounds-checked access.
+        let xr: Vec<f64> = (0..n)
+            .flat_map(|i| (0..d).map(move |c| (i, c)))
+            .map(|(i, c)| x[(i, c)])
+            .collect();
+        let mut acc = vec![0.0; d];
         let mut diag_sum = 0.0;
         for i in 0..n {
             diag_sum += g[(i, i)] * k[(i, i)];
-            for j in 0..i {
-                let w = 2.0 * g[(i, j)] * k[(i, j)];
+            let xi = &xr[i * d..(i + 1) * d];
+            let pairs = g.col(i).iter().zip(k.col(i).iter()).take(i);
+            for ((gv, kv), xj) in pairs.zip(xr.chunks_exact(d)) {
+                let w = 2.0 * gv * kv;
                 diag_sum += w;
-                for c in 0..d {
-                    let dx = x[(i, c)] - x[(j, c)];
-                    out[c] += w * dx * dx * il2[c];
+                for ((a, p), q) in acc.iter_mut().zip(xi).zip(xj) {
+                    let dx = p - q;
+                    *a += w * dx * dx;
                 }
             }
         }
-        out[d] = 2.0 * diag_sum;
+        let mut out: Vec<f64> = acc.iter().zip(&il2).map(|(a, l)| a * l).collect();
+        out.push(2.0 * diag_sum);
         out
     }
 }

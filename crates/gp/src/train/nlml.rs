@@ -133,9 +133,10 @@ pub fn nlml_curb(
 }
 
 /// Buffers [`nlml_with_kernel`] reuses between evaluations at one N (the training loop keeps
-/// one per output), so an evaluation allocates no N×N matrix except the kernel's Gram matrix.
+/// one per output), so an evaluation allocates no N×N matrix.
 pub struct NlmlWorkspace {
     spd: SpdWorkspace,
+    k: Mat<f64>,
     g: Mat<f64>,
 }
 
@@ -143,6 +144,7 @@ impl NlmlWorkspace {
     pub fn new(n: usize) -> Self {
         Self {
             spd: SpdWorkspace::new(n),
+            k: Mat::zeros(n, n),
             g: Mat::zeros(n, n),
         }
     }
@@ -178,7 +180,8 @@ pub fn nlml_with_kernel<K: Kernel + ?Sized>(
         });
     }
     let sn2 = hyp.sn2();
-    let mut k = kernel.gram(hyp, inputs);
+    kernel.gram_into(hyp, inputs, ws.k.as_mut());
+    let k = &mut ws.k;
     for i in 0..n {
         k[(i, i)] += sn2;
     }
