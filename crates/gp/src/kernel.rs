@@ -146,15 +146,22 @@ impl Kernel for SquaredExponential {
             .map(|(i, c)| x[(i, c)] * il[c])
             .collect();
         let sf2 = h.sf2();
-        for i in 0..n {
-            let xi = &xs[i * d..(i + 1) * d];
-            k[(i, i)] = sf2;
-            for j in 0..i {
-                let xj = &xs[j * d..(j + 1) * d];
+        let log_sf2 = 2.0 * h.log_sf;
+        // Column j below the diagonal: exponents first, then one vectorised exp over the
+        // contiguous run (σ_f² exp(−q/2) = exp(2 log σ_f − q/2)), then mirrored.
+        let mut col = vec![0.0; n];
+        for j in 0..n {
+            let xj = &xs[j * d..(j + 1) * d];
+            let below = &mut col[j + 1..];
+            for (v, xi) in below.iter_mut().zip(xs[(j + 1) * d..].chunks_exact(d)) {
                 let q: f64 = xi.iter().zip(xj).map(|(a, b)| (a - b) * (a - b)).sum();
-                let v = sf2 * (-0.5 * q).exp();
-                k[(i, j)] = v;
-                k[(j, i)] = v;
+                *v = log_sf2 - 0.5 * q;
+            }
+            crate::fastexp::exp_in_place(below);
+            k[(j, j)] = sf2;
+            for (i, v) in below.iter().enumerate() {
+                k[(j + 1 + i, j)] = *v;
+                k[(j, j + 1 + i)] = *v;
             }
         }
     }

@@ -39,6 +39,7 @@
 //! flops), plus O(M³ + MND).
 
 use crate::error::{GpError, Result};
+use crate::fastexp::exp_in_place;
 use crate::kernel::{Hyper, Kernel, SquaredExponential};
 use crate::linalg::{symmetrise, Chol, JitterPolicy};
 use faer::{Accum, Mat, MatRef, Par};
@@ -57,16 +58,17 @@ pub(crate) fn se_cross(h: &Hyper, a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat
             .collect()
     };
     let (sa, sb) = (scaled(a), scaled(b));
-    let sf2 = h.sf2();
+    let log_sf2 = 2.0 * h.log_sf;
     let mut k = Mat::zeros(a.nrows(), b.nrows());
     for j in 0..b.nrows() {
         let bj = &sb[j * d..(j + 1) * d];
         let col = k.col_as_slice_mut(j);
-        for (i, v) in col.iter_mut().enumerate() {
-            let ai = &sa[i * d..(i + 1) * d];
+        for (v, ai) in col.iter_mut().zip(sa.chunks_exact(d)) {
             let q: f64 = ai.iter().zip(bj).map(|(p, r)| (p - r) * (p - r)).sum();
-            *v = sf2 * (-0.5 * q).exp();
+            *v = log_sf2 - 0.5 * q;
         }
+        // σ_f² exp(−q/2) = exp(2 log σ_f − q/2), vectorised over the column.
+        exp_in_place(col);
     }
     k
 }
