@@ -246,7 +246,15 @@ pub fn train_sparse(
     } else {
         let init = match init_inducing {
             Some(u0) if u0.nrows() == subset.len() && u0.ncols() == inputs.ncols() => u0.to_owned(),
-            _ => xs,
+            Some(u0) => {
+                tracing::warn!(
+                    given = ?(u0.nrows(), u0.ncols()),
+                    wanted = ?(subset.len(), inputs.ncols()),
+                    "warm-start inducing inputs have the wrong shape; starting from the subset"
+                );
+                xs
+            }
+            None => xs,
         };
         let (u, rep) = train_inducing(inputs, targets, &hyp, init.as_ref(), &opts.inducing)?;
         (u, Some(rep))
