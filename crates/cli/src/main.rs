@@ -22,7 +22,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run a learning experiment: PILCO's pendulum or cart-pole swing-up.
+    /// Run a learning experiment: PILCO's pendulum or cart-pole swing-up, or the thesis's
+    /// VIL peg-in-hole task with GIC (vil-gic).
     ///
     /// Random initial roll-out(s), then per policy update: train the GP dynamics model, optimise
     /// the policy on the predicted return, roll it out. Writes DIR/summary.json (per update:

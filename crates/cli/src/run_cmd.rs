@@ -5,7 +5,7 @@ use vicpilco_learn::outer::{EpisodeRecord, LoopObserver, Phase};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Experiment: pendulum or cartpole.
+    /// Experiment: pendulum, cartpole or vil-gic.
     name: String,
     /// Master seed: the same seed reproduces the run.
     #[arg(long, default_value_t = 1)]
@@ -16,6 +16,9 @@ pub struct Args {
     /// Number of policy updates (default: the experiment's).
     #[arg(long)]
     episodes: Option<usize>,
+    /// Smoke test: 3 policy updates with 5 line searches each.
+    #[arg(long)]
+    quick: bool,
 }
 
 /// A progress bar over policy updates showing the phase, the current objective J and ETA.
@@ -70,12 +73,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         seed: args.seed,
         out: out.clone(),
         episodes: args.episodes,
+        quick: args.quick,
     };
-    let total = args.episodes.unwrap_or(match args.name.as_str() {
-        "pendulum" => vicpilco_env::classic::PendulumScenario::default().policy_updates,
-        "cartpole" => vicpilco_env::classic::CartPoleScenario::default().policy_updates,
-        _ => 0,
-    });
+    let total = args
+        .episodes
+        .or(args.quick.then_some(vicpilco_experiments::QUICK_EPISODES))
+        .unwrap_or(match args.name.as_str() {
+            "pendulum" => vicpilco_env::classic::PendulumScenario::default().policy_updates,
+            "cartpole" => vicpilco_env::classic::CartPoleScenario::default().policy_updates,
+            "vil-gic" => vicpilco_experiments::vil::VilSettings::default().episodes,
+            _ => 0,
+        });
     let bar = ProgressBar::new(total as u64);
     bar.set_style(
         ProgressStyle::with_template("{bar:30} {pos}/{len} updates, ETA {eta}  {msg}")

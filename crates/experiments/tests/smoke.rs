@@ -8,6 +8,7 @@ fn run_once(dir: &std::path::Path, seed: u64) -> serde_json::Value {
         seed,
         out: dir.to_path_buf(),
         episodes: Some(2),
+        quick: false,
     };
     let summary = run("pendulum", &opts, &mut ()).expect("pendulum run");
     assert_eq!(summary.episodes.len(), 2);
@@ -65,10 +66,35 @@ fn unknown_experiment_is_an_error_naming_it() {
         seed: 1,
         out: std::env::temp_dir().join("vicpilco-unknown"),
         episodes: Some(1),
+        quick: false,
     };
     let err = run("swing-a-cat", &opts, &mut ()).unwrap_err().to_string();
     assert!(
         err.contains("swing-a-cat") && err.contains("pendulum"),
         "{err}"
     );
+}
+
+/// `vicpilco run vil-gic --quick`: three short policy updates on the arm, every file written.
+#[test]
+fn vil_gic_quick_run_writes_its_summary() {
+    let dir = std::env::temp_dir().join(format!("vicpilco-vil-quick-{}", std::process::id()));
+    let opts = RunOptions {
+        seed: 1,
+        out: dir.clone(),
+        episodes: None,
+        quick: true,
+    };
+    let summary = run("vil-gic", &opts, &mut ()).expect("vil-gic quick run");
+    assert_eq!(summary.episodes.len(), vicpilco_experiments::QUICK_EPISODES);
+    for e in &summary.episodes {
+        assert!(
+            e.line_searches <= vicpilco_experiments::QUICK_LENGTH,
+            "{e:?}"
+        );
+        assert!(e.recorded_return.is_finite() && e.recorded_return > 0.0);
+        assert!(e.objective_end <= e.objective_start);
+    }
+    assert!(dir.join("summary.json").is_file() && dir.join("rollouts.json").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -140,6 +140,10 @@ const PURPOSE_EXPLORE: u64 = 3;
 /// A draw from `N(m, s)` (s may be singular: zero-variance dimensions stay at the mean).
 pub fn sample_gaussian(m: &[f64], s: &Mat<f64>, seed: u64) -> Result<Vec<f64>, LearnError> {
     let d = m.len();
+    // A deterministic start (zero covariance) has no Cholesky factor to draw with.
+    if (0..d).all(|i| (0..d).all(|j| s[(i, j)] == 0.0)) {
+        return Ok(m.to_vec());
+    }
     let mut rng = rand::rngs::ChaCha8Rng::seed_from_u64(seed);
     let z: Vec<f64> = (0..d).map(|_| StandardNormal.sample(&mut rng)).collect();
     let chol = Chol::with_jitter(s.as_ref(), "start-state covariance", Default::default())?;
