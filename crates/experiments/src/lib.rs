@@ -84,26 +84,8 @@ pub fn run(
         source: e,
     })?;
     match name {
-        "pendulum" => {
-            let mut scn = PendulumScenario::default();
-            scn.policy_updates = opts.episodes_or(scn.policy_updates);
-            if opts.quick {
-                scn.opt_length = QUICK_LENGTH as usize;
-            }
-            let config = format!("{scn:#?}");
-            let (setup, mut env) = classic::setup(scn, opts.seed)?;
-            finish(name, opts, setup, &mut env, observer, config)
-        }
-        "cartpole" => {
-            let mut scn = CartPoleScenario::default();
-            scn.policy_updates = opts.episodes_or(scn.policy_updates);
-            if opts.quick {
-                scn.opt_length = QUICK_LENGTH as usize;
-            }
-            let config = format!("{scn:#?}");
-            let (setup, mut env) = classic::setup(scn, opts.seed)?;
-            finish(name, opts, setup, &mut env, observer, config)
-        }
+        "pendulum" => run_classic(name, PendulumScenario::default(), opts, observer),
+        "cartpole" => run_classic(name, CartPoleScenario::default(), opts, observer),
         "vil-gic" => {
             let mut st = vil::VilSettings::default();
             st.episodes = opts.episodes_or(st.episodes);
@@ -116,6 +98,29 @@ pub fn run(
         }
         other => Err(ExperimentError::Unknown(other.to_string())),
     }
+}
+
+/// A classic swing-up with the run options applied to its PILCO scenario.
+fn run_classic<P, const N: usize>(
+    name: &str,
+    mut scn: vicpilco_env::classic::Scenario<P>,
+    opts: &RunOptions,
+    observer: &mut dyn LoopObserver,
+) -> Result<Summary, ExperimentError>
+where
+    P: vicpilco_env::classic::ClassicSystem
+        + vicpilco_env::classic::Dynamics<N>
+        + Send
+        + Sync
+        + 'static,
+{
+    scn.policy_updates = opts.episodes_or(scn.policy_updates);
+    if opts.quick {
+        scn.opt_length = QUICK_LENGTH as usize;
+    }
+    let config = format!("{scn:#?}");
+    let (setup, mut env) = classic::setup(scn, opts.seed)?;
+    finish(name, opts, setup, &mut env, observer, config)
 }
 
 fn finish(

@@ -136,3 +136,36 @@ pub(crate) fn check_moment_block(
     }
     Ok(out)
 }
+
+/// Check a policy case: moments, every derivative (w.r.t. m, s and the flat parameters) and
+/// the flat parameter order `p_flat`.
+pub(crate) fn check_policy<P: vicpilco_pilco::policy::Policy>(
+    case: &Case,
+    pol: &P,
+) -> Result<Vec<Comparison>, OracleError> {
+    let d = case.usize("D")?;
+    if pol.n_inputs() != d || pol.n_params() != case.usize("P")? {
+        return Err(compute_err(
+            case,
+            "the policy's sizes disagree with D and P",
+        ));
+    }
+    let (m, s) = (case.vec("m")?, case.mat("s")?);
+    let (outputs, cache) = pol
+        .forward(&m, s.as_ref())
+        .map_err(|e| compute_err(case, e))?;
+    let p = pol.n_params();
+    let mut out = check_moment_block(case, d, p, "V", &outputs, |bar| {
+        let mut pb = vec![0.0; p];
+        let g = pol.backward(&cache, bar, &mut pb);
+        (g, pb)
+    })?;
+    cmp(
+        case,
+        &mut out,
+        "p_flat",
+        Class::Value,
+        &Tensor::from_vec(&pol.params()),
+    )?;
+    Ok(out)
+}

@@ -4,6 +4,7 @@
 //! Full Jacobians are assembled from the reverse-mode pass, one unit adjoint per output entry,
 //! which checks the VJPs themselves.
 
+use super::blocks::compute_err;
 use crate::{compare, Case, Class, Comparison, KindChecker, OracleError, Tensor, Tolerance};
 use faer::Mat;
 use vicpilco_gp::moments::{backward, forward, MmCache, MmModel, Moments, MomentsAdjoint};
@@ -12,13 +13,6 @@ use vicpilco_gp::{GpModel, Hyper, SparseGpModel};
 pub struct Gp0;
 pub struct Gp2;
 pub struct Gp1;
-
-fn compute_err(case: &Case, e: impl std::fmt::Display) -> OracleError {
-    OracleError::Compute {
-        path: case.path.clone(),
-        detail: e.to_string(),
-    }
-}
 
 pub(crate) fn load_gp(case: &Case) -> Result<GpModel, OracleError> {
     let inputs = case.mat("inputs")?;
