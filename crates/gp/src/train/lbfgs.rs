@@ -131,10 +131,16 @@ type Ls = MoreThuenteLineSearch<Vec<f64>, Vec<f64>, f64>;
 type St = IterState<Vec<f64>, Vec<f64>, (), (), (), f64>;
 
 /// More–Thuente, stopped after a fixed number of trial points (PILCO's MFEPLS).
+///
+/// It also guards against a gap in argmin 0.11: when More–Thuente gives up (rounding
+/// prevents progress) it returns a state without a parameter vector, and argmin's L-BFGS then
+/// unwraps `None` and panics. Here such a state gets the line search's starting point back, so
+/// L-BFGS sees "no progress" instead.
 #[derive(Clone)]
 struct BoundedLineSearch {
     inner: Ls,
     max_evals: Option<u64>,
+    start: Option<(Vec<f64>, f64)>,
 }
 
 impl LineSearch<Vec<f64>, f64> for BoundedLineSearch {
@@ -158,6 +164,7 @@ where
         problem: &mut Problem<O>,
         state: St,
     ) -> Result<(St, Option<KV>), argmin::core::Error> {
+        self.start = state.get_param().map(|p| (p.clone(), state.get_cost()));
         self.inner.init(problem, state)
     }
     fn next_iter(
@@ -165,7 +172,11 @@ where
         problem: &mut Problem<O>,
         state: St,
     ) -> Result<(St, Option<KV>), argmin::core::Error> {
-        self.inner.next_iter(problem, state)
+        let (st, kv) = self.inner.next_iter(problem, state)?;
+        match (st.get_param(), &self.start) {
+            (None, Some((p, c))) => Ok((st.param(p.clone()).cost(*c), kv)),
+            _ => Ok((st, kv)),
+        }
     }
     fn terminate(&mut self, state: &St) -> TerminationStatus {
         match self.max_evals {
@@ -273,6 +284,7 @@ where
         let linesearch = BoundedLineSearch {
             inner: MoreThuenteLineSearch::new(),
             max_evals: opts.max_line_search_evals,
+            start: None,
         };
         let inner = LBFGS::new(linesearch, opts.memory.max(1))
             .with_tolerance_grad(0.0)
