@@ -28,7 +28,8 @@ enum Command {
     /// Random initial roll-out(s), then per policy update: train the GP dynamics model, optimise
     /// the policy on the predicted return, roll it out. Writes DIR/summary.json (per update:
     /// predicted and recorded return, success, interaction/training/optimisation time;
-    /// solved_at_episode) and DIR/rollouts.json (every roll-out).
+    /// solved_at_episode), DIR/rollouts.jsonl (every roll-out, appended as recorded) and
+    /// DIR/policy.json (final policy and dynamics hyper-parameters).
     Run(run_cmd::Args),
     /// Check vicpilco's maths against reference values from the original PILCO MATLAB code.
     ///

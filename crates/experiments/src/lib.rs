@@ -5,8 +5,9 @@
 //!
 //! * `summary.json` — per policy update: predicted return (mean, std), recorded return,
 //!   success, interaction, training and optimisation time; `solved_at_episode`;
-//! * `rollouts.json` — every roll-out (observations, actions, true states), so nothing a run
-//!   recorded is lost.
+//! * `rollouts.jsonl` — every roll-out (observations, actions, true states), one JSON line each,
+//!   appended as it is recorded, so nothing a run recorded is lost if it stops early;
+//! * `policy.json` — the final policy parameters and dynamics hyper-parameters.
 //!
 //! Experiments: `pendulum` and `cartpole` (PILCO's swing-ups, [`classic`]); `vil-gic` (the
 //! thesis's VIL experiment with the GIC controller and an RBF policy, [`vil`]; settings only
@@ -123,6 +124,57 @@ where
     finish(name, opts, setup, &mut env, observer, config)
 }
 
+/// Keeps the run directory current while the loop runs: every roll-out is appended to
+/// `rollouts.jsonl` when it is recorded and `summary.json` is rewritten after every policy
+/// update, so a run that stops early loses nothing it recorded. Forwards to the caller's
+/// observer.
+struct Recorder<'a> {
+    inner: &'a mut dyn LoopObserver,
+    summary: Summary,
+    dir: PathBuf,
+    dt: f64,
+    started: Instant,
+    rollouts: std::fs::File,
+    error: Option<ExperimentError>,
+}
+
+impl Recorder<'_> {
+    fn record(&mut self, result: Result<(), ExperimentError>) {
+        if let Err(e) = result {
+            tracing::error!("{e}");
+            self.error.get_or_insert(e);
+        }
+    }
+}
+
+impl LoopObserver for Recorder<'_> {
+    fn phase(&mut self, episode: usize, phase: vicpilco_learn::outer::Phase) {
+        self.inner.phase(episode, phase)
+    }
+    fn objective(&mut self, episode: usize, j: f64) {
+        self.inner.objective(episode, j)
+    }
+    fn rollout_done(&mut self, episode: usize, rollout: &vicpilco_learn::data::Rollout) {
+        use std::io::Write;
+        self.summary.interaction_s += rollout.len() as f64 * self.dt;
+        let line = serde_json::json!({ "episode": episode, "rollout": rollout });
+        let path = self.dir.join("rollouts.jsonl");
+        let result = writeln!(self.rollouts, "{line}")
+            .and_then(|()| self.rollouts.flush())
+            .map_err(|e| ExperimentError::Io { path, source: e });
+        self.record(result);
+        self.inner.rollout_done(episode, rollout)
+    }
+    fn episode_done(&mut self, record: &vicpilco_learn::outer::EpisodeRecord) {
+        self.summary.episodes.push(record.clone());
+        self.summary.solved_at_episode = solved_at(&self.summary.episodes);
+        self.summary.wall_s = self.started.elapsed().as_secs_f64();
+        let result = self.summary.write(&self.dir).map_err(ExperimentError::from);
+        self.record(result);
+        self.inner.episode_done(record)
+    }
+}
+
 fn finish(
     name: &str,
     opts: &RunOptions,
@@ -131,38 +183,44 @@ fn finish(
     observer: &mut dyn LoopObserver,
     config: String,
 ) -> Result<Summary, ExperimentError> {
-    let t0 = Instant::now();
-    let dt = env.dt();
-    let n_initial = setup.initial_rollouts;
-    let n_params = setup.policy.n_free_params();
-    let outcome = setup.run(env, observer)?;
-    let interaction_s = outcome
-        .initial
-        .iter()
-        .chain(&outcome.rollouts)
-        .map(|r| r.len() as f64 * dt)
-        .sum();
-    let summary = Summary {
-        experiment: name.to_string(),
-        seed: opts.seed,
-        policy: format!(
-            "rbf ({} basis functions, {} inputs)",
-            outcome.policy.n_centres(),
-            outcome.policy.n_inputs()
-        ),
-        n_params,
-        solved_at_episode: solved_at(&outcome.episodes),
-        episodes: outcome.episodes,
-        interaction_s,
-        wall_s: t0.elapsed().as_secs_f64(),
-        config: serde_json::json!({ "scenario": config, "initial_rollouts": n_initial }),
+    let path = opts.out.join("rollouts.jsonl");
+    let rollouts =
+        std::fs::File::create(&path).map_err(|e| ExperimentError::Io { path, source: e })?;
+    let mut recorder = Recorder {
+        inner: observer,
+        summary: Summary {
+            experiment: name.to_string(),
+            seed: opts.seed,
+            policy: format!(
+                "rbf ({} basis functions, {} inputs)",
+                setup.policy.n_centres(),
+                setup.policy.n_inputs()
+            ),
+            n_params: setup.policy.n_free_params(),
+            episodes: Vec::new(),
+            solved_at_episode: None,
+            interaction_s: 0.0,
+            wall_s: 0.0,
+            config: serde_json::json!({ "scenario": config, "initial_rollouts": setup.initial_rollouts }),
+        },
+        dir: opts.out.clone(),
+        dt: env.dt(),
+        started: Instant::now(),
+        rollouts,
+        error: None,
     };
+    let outcome = setup.run(env, &mut recorder)?;
+    if let Some(e) = recorder.error {
+        return Err(e);
+    }
+    let mut summary = recorder.summary;
+    summary.wall_s = recorder.started.elapsed().as_secs_f64();
     summary.write(&opts.out)?;
-    let rollouts = serde_json::json!({
-        "initial": outcome.initial,
-        "learned": outcome.rollouts,
-        "policy_params": outcome.policy.params(),
+    let policy = serde_json::json!({
+        "policy": summary.policy,
+        "params": outcome.policy.params(),
+        "dynamics_hyp": outcome.dynamics_hyp,
     });
-    write_json_atomic(&opts.out.join("rollouts.json"), &rollouts)?;
+    write_json_atomic(&opts.out.join("policy.json"), &policy)?;
     Ok(summary)
 }

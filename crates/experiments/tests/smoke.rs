@@ -23,7 +23,14 @@ fn run_once(dir: &std::path::Path, seed: u64) -> serde_json::Value {
         assert!(e.objective_end <= e.objective_start, "{e:?}");
     }
     let text = std::fs::read_to_string(dir.join("summary.json")).expect("summary.json written");
-    assert!(dir.join("rollouts.json").is_file());
+    let lines =
+        std::fs::read_to_string(dir.join("rollouts.jsonl")).expect("rollouts.jsonl written");
+    assert_eq!(
+        lines.lines().count(),
+        3,
+        "one initial and two learned roll-outs"
+    );
+    assert!(dir.join("policy.json").is_file());
     serde_json::from_str(&text).unwrap()
 }
 
@@ -95,6 +102,6 @@ fn vil_gic_quick_run_writes_its_summary() {
         assert!(e.recorded_return.is_finite() && e.recorded_return > 0.0);
         assert!(e.objective_end <= e.objective_start);
     }
-    assert!(dir.join("summary.json").is_file() && dir.join("rollouts.json").is_file());
+    assert!(dir.join("summary.json").is_file() && dir.join("rollouts.jsonl").is_file());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -46,6 +46,8 @@ pub trait LoopObserver {
     fn phase(&mut self, _episode: usize, _phase: Phase) {}
     fn objective(&mut self, _episode: usize, _j: f64) {}
     fn episode_done(&mut self, _record: &EpisodeRecord) {}
+    /// Every roll-out as soon as it is recorded (initial ones with `episode` 0).
+    fn rollout_done(&mut self, _episode: usize, _rollout: &Rollout) {}
 }
 
 impl LoopObserver for () {}
@@ -279,6 +281,7 @@ where
                 derive_seed(self.seed, k, PURPOSE_NOISE),
                 |t, obs| Ok(explore(es, t, obs)),
             )?;
+            observer.rollout_done(0, &r);
             data.push(r);
         }
         let initial = data.clone();
@@ -392,6 +395,7 @@ where
                 success = record.success,
                 "policy update done"
             );
+            observer.rollout_done(ep, &r);
             observer.episode_done(&record);
             episodes.push(record);
             data.push(r.clone());
