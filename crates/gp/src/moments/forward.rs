@@ -329,6 +329,7 @@ impl PairBlock {
             beta_a,
             beta_b,
             w,
+            symmetric: false,
         }
     }
 
@@ -342,6 +343,8 @@ impl PairBlock {
             (true, Variance::Model(w)) => Some(&w[a]),
             _ => None,
         };
-        block_forward(&self.operands(&beta_a, &beta_b, w))
+        let mut ops = self.operands(&beta_a, &beta_b, w);
+        ops.symmetric = a == b;
+        block_forward(&ops)
     }
 }

@@ -22,6 +22,9 @@ pub(crate) struct BlockOperands<'a> {
     /// Column-major N×N variance matrix, with its column stride (diagonal model-variance pair
     /// only).
     pub w: Option<(&'a [f64], usize)>,
+    /// The block of a diagonal pair (a = b) is symmetric, and so is W: the forward sums then
+    /// visit the strict lower triangle and the diagonal only.
+    pub symmetric: bool,
 }
 
 /// Outputs of the backward sweep of one pair block.
@@ -100,13 +103,13 @@ fn fill_column(op: &BlockOperands<'_>, j: usize, buf: &mut [f64]) {
 /// `(Σ_i β_ai L_ij, Σ_i W_ij L_ij)`. Rows are processed `LANES` at a time with the D-term
 /// inner products, the exponential and both reductions fused, so nothing leaves registers.
 #[inline(always)]
-fn column_sums(op: &BlockOperands<'_>, j: usize, w_col: Option<&[f64]>) -> (f64, f64) {
+fn column_sums(op: &BlockOperands<'_>, j: usize, rows: usize, w_col: Option<&[f64]>) -> (f64, f64) {
     let (n, d) = (op.n, op.d);
     let cj = op.col[j];
     let bj = &op.b[j * d..(j + 1) * d];
     let mut acc_beta = [0.0; LANES];
     let mut acc_w = [0.0; LANES];
-    let full = n / LANES * LANES;
+    let full = rows / LANES * LANES;
     let mut i0 = 0;
     while i0 < full {
         let mut x = [0.0; LANES];
@@ -133,7 +136,7 @@ fn column_sums(op: &BlockOperands<'_>, j: usize, w_col: Option<&[f64]>) -> (f64,
     }
     let mut sb: f64 = acc_beta.iter().sum();
     let mut sw: f64 = acc_w.iter().sum();
-    for i in full..n {
+    for i in full..rows {
         let mut x = op.row[i];
         for (k, &bjk) in bj.iter().enumerate() {
             x = op.a_hat[k * n + i].mul_add(bjk, x);
@@ -154,9 +157,20 @@ fn forward_generic(op: &BlockOperands<'_>) -> (f64, f64) {
     let mut trace = 0.0;
     for j in 0..n {
         let w_col = op.w.map(|(w, stride)| &w[j * stride..j * stride + n]);
-        let (sb, sw) = column_sums(op, j, w_col);
-        total += sb * op.beta_b[j];
-        trace += sw;
+        if op.symmetric {
+            let (sb, sw) = column_sums(op, j, j, w_col);
+            let mut x = op.row[j] + op.col[j];
+            for k in 0..op.d {
+                x = op.a_hat[k * n + j].mul_add(op.b[j * op.d + k], x);
+            }
+            let ljj = exp1(x);
+            total += (2.0 * sb + op.beta_a[j] * ljj) * op.beta_b[j];
+            trace += 2.0 * sw + w_col.map_or(0.0, |w| w[j] * ljj);
+        } else {
+            let (sb, sw) = column_sums(op, j, n, w_col);
+            total += sb * op.beta_b[j];
+            trace += sw;
+        }
     }
     (total, trace)
 }
