@@ -280,18 +280,26 @@ impl PairBlock {
         let row = (0..n).map(|i| outputs[pc.a].log_k[i] + qa[i]).collect();
         let col = (0..n).map(|j| outputs[pc.b].log_k[j] + qb[j]).collect();
         let at = mul(scaled_a.as_ref(), pc.t_mat.as_ref());
-        let a_hat = (0..d)
-            .flat_map(|k| (0..n).map(move |i| (i, k)))
-            .map(|(i, k)| 2.0 * at[(i, k)])
-            .collect();
-        let b_rows = (0..n)
-            .flat_map(|j| (0..d).map(move |k| (j, k)))
-            .map(|(j, k)| scaled_b[(j, k)])
-            .collect();
-        let a_cols = (0..d)
-            .flat_map(|k| (0..n).map(move |i| (i, k)))
-            .map(|(i, k)| scaled_a[(i, k)])
-            .collect();
+        // Flat column-major copies for the kernels, column by column (contiguous in faer).
+        let col_of = |m: &Mat<f64>, k: usize| -> Vec<f64> {
+            m.col(k)
+                .try_as_col_major()
+                .expect("fresh matrix is column-major")
+                .as_slice()
+                .to_vec()
+        };
+        let mut a_hat = Vec::with_capacity(n * d);
+        let mut a_cols = Vec::with_capacity(n * d);
+        for k in 0..d {
+            a_hat.extend(col_of(&at, k).iter().map(|v| 2.0 * v));
+            a_cols.extend(col_of(&scaled_a, k));
+        }
+        let mut b_rows = vec![0.0; n * d];
+        for k in 0..d {
+            for (j, v) in col_of(&scaled_b, k).into_iter().enumerate() {
+                b_rows[j * d + k] = v;
+            }
+        }
         Self {
             scaled_a,
             scaled_b,

@@ -27,15 +27,25 @@ pub(crate) fn mul_tn(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
 
 /// `A diag(d)`: scale the columns.
 pub(crate) fn scale_cols(a: MatRef<'_, f64>, d: &[f64]) -> Mat<f64> {
-    Mat::from_fn(a.nrows(), a.ncols(), |i, j| a[(i, j)] * d[j])
+    let mut out = a.to_owned();
+    for (j, dj) in d.iter().enumerate() {
+        for v in out.col_mut(j).iter_mut() {
+            *v *= dj;
+        }
+    }
+    out
 }
 
 /// Row-wise quadratic forms `x_iᵀ T x_i` for the rows of X (T symmetric).
 pub(crate) fn row_quad(x: MatRef<'_, f64>, t: MatRef<'_, f64>) -> Vec<f64> {
     let xt = mul(x, t);
-    (0..x.nrows())
-        .map(|i| (0..x.ncols()).map(|k| xt[(i, k)] * x[(i, k)]).sum())
-        .collect()
+    let mut out = vec![0.0; x.nrows()];
+    for k in 0..x.ncols() {
+        for ((o, a), b) in out.iter_mut().zip(xt.col(k).iter()).zip(x.col(k).iter()) {
+            *o += a * b;
+        }
+    }
+    out
 }
 
 /// `Xᵀ diag(w) X` (D×D).
