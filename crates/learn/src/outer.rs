@@ -121,8 +121,9 @@ pub struct LoopOutcome<P> {
     pub rollouts: Vec<Rollout>,
     pub policy: P,
     pub dynamics_hyp: Vec<Hyper>,
-    /// Predicted trajectory of the final policy (first start distribution).
-    pub final_prediction: ValueOut,
+    /// Per policy update, the long-term prediction of the optimised policy under that
+    /// update's dynamics model (for predicted-vs-recorded plots).
+    pub predictions: Vec<ValueOut>,
 }
 
 /// SplitMix64 of (master seed, episode, purpose): independent streams without stored state.
@@ -289,6 +290,7 @@ where
         let mut inducing: Option<Mat<f64>> = None;
         let mut episodes = Vec::with_capacity(self.episodes);
         let mut rollouts = Vec::with_capacity(self.episodes);
+        let mut predictions = Vec::with_capacity(self.episodes);
         for ep in 1..=self.episodes {
             // Train the dynamics model.
             observer.phase(ep, Phase::Train);
@@ -354,6 +356,7 @@ where
             )?;
             let out = value(&pred, &self.ret, &self.prediction_starts, false)?;
             let (predicted_mean, predicted_std) = self.predicted(&out);
+            predictions.push(out);
 
             // Roll out.
             observer.phase(ep, Phase::Rollout);
@@ -401,28 +404,13 @@ where
             data.push(r.clone());
             rollouts.push(r);
         }
-        let final_prediction = {
-            let (inputs, targets) = training_set(&self.spec, &data, self.prior_shift.as_deref());
-            let hyp_now = hyp
-                .clone()
-                .unwrap_or_else(|| initial_hyper(&inputs, &targets));
-            let gp = vicpilco_gp::GpModel::new(inputs, targets, hyp_now)?;
-            let pred = Predictor::new(
-                &self.spec,
-                &self.policy,
-                self.squash.as_ref(),
-                MmModel::with_uncertainty(&gp),
-                self.prior_shift.as_deref(),
-            )?;
-            value(&pred, &self.ret, &self.prediction_starts, false)?
-        };
         Ok(LoopOutcome {
             initial,
             episodes,
             rollouts,
             policy: self.policy,
             dynamics_hyp: hyp.unwrap_or_default(),
-            final_prediction,
+            predictions,
         })
     }
 }
