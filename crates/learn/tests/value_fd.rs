@@ -122,33 +122,24 @@ fn check(v: Variant, seed: u64) {
             (m, s)
         })
         .collect();
+    let shift_opt = v.prior_shift.then_some(shift.as_slice());
+    let problem = Problem {
+        spec: &spec,
+        squash: squash.as_ref(),
+        gp: &gp,
+        shift: shift_opt,
+        ret: &ret,
+        starts: &starts,
+    };
     let run = |params: &[f64], with_grad: bool| -> (f64, Option<Vec<f64>>) {
         if v.rbf {
             let mut pol = rbf_template(p_in, u);
             pol.set_params(params).unwrap();
-            let pred = Predictor::new(
-                &spec,
-                &pol,
-                squash.as_ref(),
-                MmModel::with_uncertainty(&gp),
-                v.prior_shift.then_some(shift.as_slice()),
-            )
-            .unwrap();
-            let out = value(&pred, &ret, &starts, with_grad).unwrap();
-            (out.j, out.grad)
+            problem.evaluate(&pol, with_grad)
         } else {
             let mut pol = LinearPolicy::zeros(p_in, u);
             pol.set_params(params).unwrap();
-            let pred = Predictor::new(
-                &spec,
-                &pol,
-                squash.as_ref(),
-                MmModel::with_uncertainty(&gp),
-                v.prior_shift.then_some(shift.as_slice()),
-            )
-            .unwrap();
-            let out = value(&pred, &ret, &starts, with_grad).unwrap();
-            (out.j, out.grad)
+            problem.evaluate(&pol, with_grad)
         }
     };
     let p0: Vec<f64> = if v.rbf {
@@ -174,6 +165,34 @@ fn check(v: Variant, seed: u64) {
             "{} trial {trial}: analytic {analytic:.12e} numeric {numeric:.12e} rel {err:.2e}",
             v.name
         );
+    }
+}
+
+/// Everything but the policy: J (and dJ/dψ) of any policy type.
+struct Problem<'a> {
+    spec: &'a StepSpec,
+    squash: Option<&'a PartialSat>,
+    gp: &'a GpModel,
+    shift: Option<&'a [Vec<f64>]>,
+    ret: &'a ReturnSpec,
+    starts: &'a [(Vec<f64>, Mat<f64>)],
+}
+
+impl Problem<'_> {
+    fn evaluate<P: Policy + Sync>(&self, pol: &P, with_grad: bool) -> (f64, Option<Vec<f64>>)
+    where
+        P::Cache: Send,
+    {
+        let pred = Predictor::new(
+            self.spec,
+            pol,
+            self.squash,
+            MmModel::with_uncertainty(self.gp),
+            self.shift,
+        )
+        .unwrap();
+        let out = value(&pred, self.ret, self.starts, with_grad).unwrap();
+        (out.j, out.grad)
     }
 }
 
