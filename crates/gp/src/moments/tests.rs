@@ -65,6 +65,21 @@ fn contract(adj: &(Vec<f64>, Mat<f64>, Mat<f64>), mo: &Moments) -> f64 {
     f
 }
 
+/// The backward pass for random adjoints `(M̄, S̄, V̄)`.
+fn vjp(
+    mm: &MmModel<'_>,
+    cache: &MmCache,
+    adj: &(Vec<f64>, Mat<f64>, Mat<f64>),
+    with_params: bool,
+) -> InputAdjoint {
+    let bar = MomentsAdjoint {
+        mean: &adj.0,
+        cov: adj.1.as_ref(),
+        v: adj.2.as_ref(),
+    };
+    backward(mm, cache, bar, with_params).unwrap()
+}
+
 fn random_adjoint(rng: &mut Lcg, d: usize, e: usize) -> (Vec<f64>, Mat<f64>, Mat<f64>) {
     (
         (0..e).map(|_| rng.normal()).collect(),
@@ -120,17 +135,7 @@ fn check_input_vjp(flavour: Flavour, n: usize, d: usize, e: usize, seed: u64) {
     let s = random_spd(&mut rng, d, 0.3);
     let adj = random_adjoint(&mut rng, d, e);
     let (_, cache) = forward(&mm, &m, s.as_ref()).unwrap();
-    let ia = backward(
-        &mm,
-        &cache,
-        MomentsAdjoint {
-            mean: &adj.0,
-            cov: adj.1.as_ref(),
-            v: adj.2.as_ref(),
-        },
-        false,
-    )
-    .unwrap();
+    let ia = vjp(&mm, &cache, &adj, false);
     let x0 = pack(&m, &s);
     for trial in 0..3 {
         let dir: Vec<f64> = x0.iter().map(|_| rng.normal()).collect();
@@ -182,17 +187,7 @@ fn mean_gp_parameter_vjp_matches_finite_differences() {
         let adj = random_adjoint(&mut rng, d, e);
         let mm = MmModel::mean_only(&gp);
         let (_, cache) = forward(&mm, &m, s.as_ref()).unwrap();
-        let ia = backward(
-            &mm,
-            &cache,
-            MomentsAdjoint {
-                mean: &adj.0,
-                cov: adj.1.as_ref(),
-                v: adj.2.as_ref(),
-            },
-            true,
-        )
-        .unwrap();
+        let ia = vjp(&mm, &cache, &adj, true);
         let full = gp.chain_param_adjoint(ia.params.as_ref().unwrap());
         // Parameters flattened: inputs, targets, hyp columns.
         let mut x0 = Vec::new();
