@@ -16,7 +16,7 @@
 mod lbfgs;
 mod nlml;
 
-pub use lbfgs::{minimize, MinimizeOptions, MinimizeResult, Termination, MAX_RESTARTS};
+pub use lbfgs::{minimize, MinimizeOptions, MinimizeResult, Termination, Wolfe, MAX_RESTARTS};
 pub use nlml::{input_std, nlml, nlml_curb, nlml_with_kernel, HypCurb, NlmlEval, NlmlWorkspace};
 
 use crate::error::{GpError, Result};
@@ -67,6 +67,7 @@ impl TrainOptions {
             rel_tol: self.rel_tol,
             memory: self.memory,
             max_line_search_evals: None,
+            wolfe: Wolfe::LOOSE,
         }
     }
 }

@@ -15,7 +15,9 @@ use crate::error::{GpError, Result};
 use crate::kernel::Hyper;
 use crate::linalg::check_finite;
 use crate::model::validate_data;
-use crate::train::{minimize, train, MinimizeOptions, Termination, TrainOptions, TrainReport};
+use crate::train::{
+    minimize, train, MinimizeOptions, Termination, TrainOptions, TrainReport, Wolfe,
+};
 use faer::{Mat, MatRef};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -198,6 +200,7 @@ pub fn train_inducing(
         rel_tol: opts.rel_tol,
         memory: opts.memory,
         max_line_search_evals: None,
+        wolfe: Wolfe::LOOSE,
     };
     let r = minimize(&mut f, x0, &mopts).ok_or_else(|| GpError::Numerical {
         what: "FITC nlml at the initial inducing inputs".into(),

@@ -49,6 +49,25 @@ impl Termination {
     }
 }
 
+/// The Wolfe conditions the line search accepts a step with: sufficient decrease
+/// `f(x + αd) ≤ f(x) + c1 α ∇fᵀd` and curvature `|∇f(x + αd)ᵀd| ≤ c2 |∇fᵀd|`,
+/// `0 < c1 < c2 < 1`. A small `c2` makes each line search more exact.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Wolfe {
+    pub c1: f64,
+    pub c2: f64,
+}
+
+impl Wolfe {
+    /// The usual quasi-Newton choice (argmin's default): almost any decrease is accepted, so
+    /// most line searches take one evaluation.
+    pub const LOOSE: Wolfe = Wolfe { c1: 1e-4, c2: 0.9 };
+    /// The constants of Rasmussen's `minimize.m`, which PILCO optimises its policies with:
+    /// RHO = 0.05, SIG = 0.1. With a budget counted in line searches (PILCO's "Length"), the
+    /// more exact searches make more progress per line search.
+    pub const PILCO: Wolfe = Wolfe { c1: 0.05, c2: 0.1 };
+}
+
 /// Stopping rules and memory of [`minimize`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MinimizeOptions {
@@ -61,6 +80,8 @@ pub struct MinimizeOptions {
     /// A line search cut short hands its last trial point to L-BFGS; the best point seen is
     /// still what [`minimize`] returns.
     pub max_line_search_evals: Option<u64>,
+    /// Acceptance rule of the line search; must satisfy `0 < c1 < c2 < 1`.
+    pub wolfe: Wolfe,
 }
 
 /// Outcome of [`minimize`].
@@ -244,7 +265,8 @@ where
 }
 
 /// Minimise `f` (returning value and gradient, or `None` where it cannot be evaluated) by
-/// L-BFGS from `x0`. Returns `None` when `f` fails at `x0`.
+/// L-BFGS from `x0`. Returns `None` when `f` fails at `x0` or `opts.wolfe` violates
+/// `0 < c1 < c2 < 1`.
 pub fn minimize<F>(f: &mut F, x0: Vec<f64>, opts: &MinimizeOptions) -> Option<MinimizeResult>
 where
     F: FnMut(&[f64]) -> Option<(f64, Vec<f64>)>,
@@ -282,7 +304,9 @@ where
             evals: Cell::new(0),
         };
         let linesearch = BoundedLineSearch {
-            inner: MoreThuenteLineSearch::new(),
+            inner: MoreThuenteLineSearch::new()
+                .with_c(opts.wolfe.c1, opts.wolfe.c2)
+                .ok()?,
             max_evals: opts.max_line_search_evals,
             start: None,
         };
@@ -385,6 +409,7 @@ mod tests {
             rel_tol: 0.0,
             memory: 10,
             max_line_search_evals: None,
+            wolfe: Wolfe::LOOSE,
         };
         let r = minimize(&mut rosenbrock, vec![-1.2, 1.0], &opts).unwrap();
         assert!(
@@ -392,6 +417,44 @@ mod tests {
             "{r:?}"
         );
         assert!(r.termination.converged(), "{r:?}");
+    }
+
+    #[test]
+    fn exact_line_searches_need_fewer_iterations() {
+        let run = |wolfe| {
+            let opts = MinimizeOptions {
+                max_iters: 500,
+                grad_tol: 1e-8,
+                rel_tol: 0.0,
+                memory: 10,
+                max_line_search_evals: None,
+                wolfe,
+            };
+            minimize(&mut rosenbrock, vec![-1.2, 1.0], &opts).unwrap()
+        };
+        let (loose, pilco) = (run(Wolfe::LOOSE), run(Wolfe::PILCO));
+        for r in [&loose, &pilco] {
+            assert!(
+                (r.x[0] - 1.0).abs() < 1e-6 && (r.x[1] - 1.0).abs() < 1e-6,
+                "{r:?}"
+            );
+        }
+        assert!(
+            pilco.iterations < loose.iterations,
+            "{pilco:?} vs {loose:?}"
+        );
+        let bad = MinimizeOptions {
+            wolfe: Wolfe { c1: 0.5, c2: 0.1 },
+            ..MinimizeOptions {
+                max_iters: 1,
+                grad_tol: 0.0,
+                rel_tol: 0.0,
+                memory: 1,
+                max_line_search_evals: None,
+                wolfe: Wolfe::LOOSE,
+            }
+        };
+        assert!(minimize(&mut rosenbrock, vec![0.0, 0.0], &bad).is_none());
     }
 
     #[test]
@@ -410,6 +473,7 @@ mod tests {
             rel_tol: 0.0,
             memory: 5,
             max_line_search_evals: None,
+            wolfe: Wolfe::LOOSE,
         };
         let r = minimize(&mut f, vec![-10.0], &opts).unwrap();
         assert!((r.x[0] - 3.0).abs() < 1e-6, "{r:?}");
@@ -424,6 +488,7 @@ mod tests {
             rel_tol: 1e-6,
             memory: 5,
             max_line_search_evals: None,
+            wolfe: Wolfe::LOOSE,
         };
         assert!(minimize(&mut f, vec![0.0], &opts).is_none());
     }
