@@ -52,7 +52,7 @@
 //! | start distributions K | 1 | set `K` |
 //! | GP training | 300 line searches (full), 500 (sparse) | set `trainOpt` |
 //! | sparse GP | 300 inducing inputs, used above 300 points | set `dynmodel.induce`, `train.m` |
-//! | success test | last 10 states: tip ≤ 0.1 m from target, \|θ̇\| ≤ 1 rad/s | **ours** |
+//! | success test | last 10 states: tip ≤ 0.1 m from target (no limit on θ̇) | **ours** |
 //!
 //! With the target augmented to (0, 0, 0, π, 0, −1), `(a − a*)ᵀ Q (a − a*)` =
 //! `(x + l sin θ)² + l² (cos θ + 1)²`, the squared distance of the tip
@@ -212,7 +212,11 @@ impl Default for Scenario<CartPolePhysics> {
             success: SuccessTest {
                 window: 10,
                 max_tip_distance: 0.1,
-                max_angular_speed: 1.0,
+                // No limit: a tip within 0.1 m of the target at ten consecutive 0.1 s samples
+                // already means the pole stayed up for the last second. Balancing policies
+                // under the 0.1 s zero-order hold chatter θ̇ by ±1.6 rad/s (measured), which a
+                // speed limit of 1 rad/s wrongly called failures.
+                max_angular_speed: f64::INFINITY,
             },
         }
     }
@@ -352,10 +356,14 @@ mod tests {
         let mut off = traj.clone();
         off[38][0] = 0.2;
         assert!(!s.success(&off));
-        // pole spinning
-        let mut fast = traj.clone();
-        fast[39][2] = -1.2;
-        assert!(!s.success(&fast));
+        // θ̇ chatter while the tip stays up is balancing, not failure
+        let mut chatter = traj.clone();
+        chatter[39][2] = -1.6;
+        assert!(s.success(&chatter));
+        // the pole leaving the window in the last second fails
+        let mut fell = traj.clone();
+        fell[35][3] = PI + 0.5;
+        assert!(!s.success(&fell));
         // a full turn later is still upright
         let turned: Vec<[f64; 4]> = vec![[0.0, 0.0, 0.0, 3.0 * PI]; 10];
         assert!(s.success(&turned));

@@ -101,7 +101,8 @@ pub struct SuccessTest {
     /// Largest distance of the pole tip from its upright target position (m), the distance
     /// the cost penalises.
     pub max_tip_distance: f64,
-    /// Largest |θ̇| (rad/s), so the pole is balanced rather than passing through the top.
+    /// Largest |θ̇| (rad/s), so the pole is balanced rather than passing through the top
+    /// (`f64::INFINITY`: no limit).
     pub max_angular_speed: f64,
 }
 
