@@ -5,7 +5,8 @@ use vicpilco_learn::outer::{EpisodeRecord, LoopObserver, Phase};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Experiment: pendulum, cartpole or vil-gic.
+    /// Experiment: pendulum, cartpole, or a thesis run: vil-gic (= vil-gic-rbf10),
+    /// vil-gic-lin, vil-gic-rbf25, vil-sic, vilta, vilta-var (settings in experiments/*.toml).
     name: String,
     /// Master seed: the same seed reproduces the run.
     #[arg(long, default_value_t = 1)]
@@ -19,6 +20,14 @@ pub struct Args {
     /// Smoke test: 3 policy updates with 5 line searches each.
     #[arg(long)]
     quick: bool,
+    /// Read the thesis run's settings from this TOML file instead of the shipped one (NAME
+    /// then only labels the run).
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Continue the run in DIR from its checkpoint.json (same name, seed and settings; the
+    /// number of updates may grow). The continued run equals an uninterrupted one bit for bit.
+    #[arg(long)]
+    resume: bool,
 }
 
 /// A progress bar over policy updates showing the phase, the current objective J and ETA.
@@ -44,14 +53,25 @@ impl LoopObserver for Progress {
             .set_message(format!("episode {episode}: optimise policy, J = {j:.3}"));
     }
     fn episode_done(&mut self, r: &EpisodeRecord) {
-        self.bar.inc(1);
+        self.bar.set_position(r.index as u64);
+        let outcome = if r.rollouts > 1 {
+            format!(
+                "{:.0} % of {} roll-outs succeed",
+                100.0 * r.success_fraction,
+                r.rollouts
+            )
+        } else if r.success {
+            "success".to_string()
+        } else {
+            "no success".to_string()
+        };
         let line = format!(
             "episode {:>2}: predicted {:.2} ± {:.2}, recorded {:.2}, {} (train {:.1} s, optimise {:.1} s, {} evaluations)",
             r.index,
             r.predicted_return_mean,
             r.predicted_return_std,
             r.recorded_return,
-            if r.success { "success" } else { "no success" },
+            outcome,
             r.train_s,
             r.optimise_s,
             r.evaluations
@@ -74,16 +94,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         out: out.clone(),
         episodes: args.episodes,
         quick: args.quick,
+        config: args.config,
+        resume: args.resume,
     };
-    let total = args
-        .episodes
-        .or(args.quick.then_some(vicpilco_experiments::QUICK_EPISODES))
-        .unwrap_or(match args.name.as_str() {
-            "pendulum" => vicpilco_env::classic::PendulumScenario::default().policy_updates,
-            "cartpole" => vicpilco_env::classic::CartPoleScenario::default().policy_updates,
-            "vil-gic" => vicpilco_experiments::vil::VilSettings::default().episodes,
-            _ => 0,
-        });
+    let total = vicpilco_experiments::planned_updates(&args.name, &opts)
+        .with_context(|| format!("running `{}`", args.name))?;
     let bar = ProgressBar::new(total as u64);
     bar.set_style(
         ProgressStyle::with_template("{bar:30} {pos}/{len} updates, ETA {eta}  {msg}")

@@ -52,7 +52,7 @@ pub struct Step {
 
 /// Diagnostics of one step. Simulators fill in the true state; a real robot may leave it equal
 /// to the observation.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StepInfo {
     /// System time at the end of the step, seconds since reset.
     pub t: f64,

@@ -6,9 +6,11 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use vicpilco_env::classic::{ClassicEnv, ClassicSystem, Dynamics, Scenario};
 use vicpilco_gp::sparse::{InducingOptions, SparseTrainOptions};
+use vicpilco_gp::train::Wolfe;
 use vicpilco_gp::{DynamicsOptions, TrainOptions};
 use vicpilco_learn::joint::Joint;
 use vicpilco_learn::outer::{derive_seed, LoopSetup, OptimiserOptions};
+use vicpilco_learn::start::StartDistribution;
 use vicpilco_learn::step::{StepSpec, Target};
 use vicpilco_learn::value::ReturnSpec;
 use vicpilco_pilco::cost::{CostSum, SaturatingCost};
@@ -144,16 +146,21 @@ where
         squash: Some(squash),
         ret,
         prediction_starts: vec![start.clone(); scn.start_distributions.max(1)],
-        env_start: start,
+        env_start: StartDistribution::Gaussian {
+            mean: start.0,
+            cov: start.1,
+        },
         prior_shift: None,
         dynamics,
         optimiser: OptimiserOptions {
             length: scn.opt_length as u64,
             mfepls: scn.opt_mfepls as u64,
             memory: 10,
+            wolfe: Wolfe::PILCO,
         },
         initial_rollouts: scn.initial_rollouts,
         episodes: scn.policy_updates,
+        rollouts_per_episode: 1,
         policy,
         explore: Box::new(move |seed, t, _obs| {
             // One independent uniform action per step, as PILCO's random policy.

@@ -1,35 +1,44 @@
 //! # vicpilco-experiments: runnable learning experiments
 //!
 //! Each experiment builds a [`vicpilco_learn::outer::LoopSetup`] and a system, runs the PILCO
-//! loop and writes a run directory:
+//! loop and keeps a run directory current ([`record`]):
 //!
 //! * `summary.json` — per policy update: predicted return (mean, std), recorded return,
-//!   success, interaction, training and optimisation time; `solved_at_episode`;
-//! * `rollouts.jsonl` — every roll-out (observations, actions, true states), one JSON line each,
-//!   appended as it is recorded, so nothing a run recorded is lost if it stops early;
-//! * `policy.json` — the final policy parameters and dynamics hyper-parameters.
+//!   success (and the fraction of the update's roll-outs that succeeded, as a colour), timings;
+//!   `solved_at_episode`; the settings; the thesis's numbers beside the run's ([`checks`]);
+//! * `rollouts.jsonl` — every roll-out with its weighted cost per step, appended as recorded;
+//! * `predictions.jsonl` — every update's long-term prediction (means, variances, costs);
+//! * `checkpoint.json` — what `--resume` needs to continue bit for bit;
+//! * `policy.json` — the final policy parameters and dynamics hyper-parameters;
+//! * `final_eval.jsonl` — runs with evaluation starts: the final policy from fresh starts.
 //!
-//! Experiments: `pendulum` and `cartpole` (PILCO's swing-ups, [`classic`]); `vil-gic` (the
-//! thesis's VIL experiment with the GIC controller and an RBF policy, [`vil`]; settings only
-//! in code so far — the TOML configs and the other thesis runs are open work).
+//! Experiments: `pendulum` and `cartpole` (PILCO's swing-ups, [`classic`]), and the thesis's
+//! peg-in-hole runs configured by `experiments/*.toml` ([`config`], [`arm`]).
 
+pub mod arm;
+pub mod checks;
 pub mod classic;
+pub mod config;
+pub mod record;
 pub mod summary;
-pub mod vil;
 
+use config::{ArmExperiment, PolicyKind};
+use record::{open_jsonl, read_checkpoint, PredictionLabels, Recorder, RolloutExtras};
 use std::path::PathBuf;
 use std::time::Instant;
-use summary::{solved_at, write_json_atomic, Summary};
+use summary::{write_json_atomic, Summary};
 use vicpilco_env::classic::{CartPoleScenario, PendulumScenario};
 use vicpilco_env::Environment;
-use vicpilco_learn::outer::{LoopObserver, LoopSetup};
-use vicpilco_pilco::policy::{Policy, RbfPolicy};
+use vicpilco_learn::outer::{LoopObserver, LoopOutcome, LoopSetup};
+use vicpilco_pilco::policy::Policy;
 
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ExperimentError {
-    #[error("unknown experiment `{0}` (known: {known})", known = EXPERIMENTS.join(", "))]
+    #[error("unknown experiment `{0}` (known: {known})", known = experiment_names().join(", "))]
     Unknown(String),
+    #[error(transparent)]
+    Config(#[from] config::ConfigError),
     #[error(transparent)]
     Learn(#[from] vicpilco_learn::LearnError),
     #[error(transparent)]
@@ -45,13 +54,25 @@ pub enum ExperimentError {
         path: PathBuf,
         source: std::io::Error,
     },
+    #[error("cannot resume from {path}: {message}")]
+    Resume { path: PathBuf, message: String },
 }
 
-/// Names `vicpilco run` accepts.
-pub const EXPERIMENTS: &[&str] = &["pendulum", "cartpole", "vil-gic"];
+/// The classic benchmarks (configured in code from PILCO's published scenarios).
+pub const CLASSIC: &[&str] = &["pendulum", "cartpole"];
+
+/// Names `vicpilco run` accepts: the classic benchmarks, the shipped configs and their aliases.
+pub fn experiment_names() -> Vec<&'static str> {
+    CLASSIC
+        .iter()
+        .copied()
+        .chain(config::CONFIGS.iter().map(|(n, _)| *n))
+        .chain(config::ALIASES.iter().map(|(a, _)| *a))
+        .collect()
+}
 
 /// What the caller chooses about a run.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct RunOptions {
     pub seed: u64,
     pub out: PathBuf,
@@ -60,6 +81,10 @@ pub struct RunOptions {
     /// Smoke-test mode: [`QUICK_EPISODES`] updates with [`QUICK_LENGTH`] line searches each
     /// (an explicit `episodes` still wins).
     pub quick: bool,
+    /// A config file to use instead of the shipped one (arm experiments).
+    pub config: Option<PathBuf>,
+    /// Continue the run in `out` from its `checkpoint.json`.
+    pub resume: bool,
 }
 
 /// Policy updates of a `--quick` run.
@@ -74,31 +99,57 @@ impl RunOptions {
     }
 }
 
+/// The number of policy updates `run` will do with these options.
+pub fn planned_updates(name: &str, opts: &RunOptions) -> Result<usize, ExperimentError> {
+    let default = match load_config(name, opts)? {
+        Some(cfg) => cfg.episodes,
+        None if name == "pendulum" => PendulumScenario::default().policy_updates,
+        None => CartPoleScenario::default().policy_updates,
+    };
+    Ok(opts.episodes_or(default))
+}
+
+/// The arm config of a run (`--config` file, or the shipped one), `None` for the classic ones.
+fn load_config(name: &str, opts: &RunOptions) -> Result<Option<ArmExperiment>, ExperimentError> {
+    Ok(match (&opts.config, name) {
+        (Some(path), _) => Some(config::load(path)?),
+        (None, "pendulum" | "cartpole") => None,
+        (None, _) => {
+            let (file, text) =
+                config::shipped(name).ok_or_else(|| ExperimentError::Unknown(name.to_string()))?;
+            Some(config::parse(text, &format!("experiments/{file}.toml"))?)
+        }
+    })
+}
+
 /// Run an experiment by name and write its run directory.
 pub fn run(
     name: &str,
     opts: &RunOptions,
     observer: &mut dyn LoopObserver,
 ) -> Result<Summary, ExperimentError> {
+    let cfg = load_config(name, opts)?;
     std::fs::create_dir_all(&opts.out).map_err(|e| ExperimentError::Io {
         path: opts.out.clone(),
         source: e,
     })?;
-    match name {
-        "pendulum" => run_classic(name, PendulumScenario::default(), opts, observer),
-        "cartpole" => run_classic(name, CartPoleScenario::default(), opts, observer),
-        "vil-gic" => {
-            let mut st = vil::VilSettings::default();
-            st.episodes = opts.episodes_or(st.episodes);
-            if opts.quick {
-                st.opt_length = QUICK_LENGTH;
-            }
-            let config = format!("{st:#?}");
-            let (setup, mut env) = vil::setup(&st, opts.seed)?;
-            finish(name, opts, setup, &mut env, observer, config)
-        }
-        other => Err(ExperimentError::Unknown(other.to_string())),
+    match (cfg, name) {
+        (Some(cfg), _) => run_arm(name, cfg, opts, observer),
+        (None, "pendulum") => run_classic(name, PendulumScenario::default(), opts, observer),
+        (None, _) => run_classic(name, CartPoleScenario::default(), opts, observer),
     }
+}
+
+/// What a run is, for its summary and checkpoint.
+struct RunMeta {
+    /// Every setting, for `summary.json`.
+    config: serde_json::Value,
+    /// The settings a resumed run must share (all but the number of updates).
+    identity: serde_json::Value,
+    controller: Option<String>,
+    policy: String,
+    n_params: usize,
+    extras: Option<RolloutExtras>,
 }
 
 /// A classic swing-up with the run options applied to its PILCO scenario.
@@ -115,106 +166,182 @@ where
         + Sync
         + 'static,
 {
-    scn.policy_updates = opts.episodes_or(scn.policy_updates);
     if opts.quick {
         scn.opt_length = QUICK_LENGTH as usize;
     }
-    let config = format!("{scn:#?}");
-    let (setup, mut env) = classic::setup(scn, opts.seed)?;
-    finish(name, opts, setup, &mut env, observer, config)
-}
-
-/// Keeps the run directory current while the loop runs: every roll-out is appended to
-/// `rollouts.jsonl` when it is recorded and `summary.json` is rewritten after every policy
-/// update, so a run that stops early loses nothing it recorded. Forwards to the caller's
-/// observer.
-struct Recorder<'a> {
-    inner: &'a mut dyn LoopObserver,
-    summary: Summary,
-    dir: PathBuf,
-    dt: f64,
-    started: Instant,
-    rollouts: std::fs::File,
-    error: Option<ExperimentError>,
-}
-
-impl Recorder<'_> {
-    fn record(&mut self, result: Result<(), ExperimentError>) {
-        if let Err(e) = result {
-            tracing::error!("{e}");
-            self.error.get_or_insert(e);
+    let identity = serde_json::Value::String(format!(
+        "{:#?}",
+        vicpilco_env::classic::Scenario {
+            policy_updates: 0,
+            ..scn.clone()
         }
-    }
+    ));
+    scn.policy_updates = opts.episodes_or(scn.policy_updates);
+    let config = serde_json::json!({ "scenario": format!("{scn:#?}") });
+    let (setup, mut env) = classic::setup(scn, opts.seed)?;
+    let meta = RunMeta {
+        config,
+        identity,
+        controller: None,
+        policy: format!(
+            "rbf ({} basis functions, {} inputs)",
+            setup.policy.n_centres(),
+            setup.policy.n_inputs()
+        ),
+        n_params: setup.policy.n_free_params(),
+        extras: None,
+    };
+    Ok(finish(name, opts, setup, &mut env, observer, meta)?.0)
 }
 
-impl LoopObserver for Recorder<'_> {
-    fn phase(&mut self, episode: usize, phase: vicpilco_learn::outer::Phase) {
-        self.inner.phase(episode, phase)
-    }
-    fn objective(&mut self, episode: usize, j: f64) {
-        self.inner.objective(episode, j)
-    }
-    fn rollout_done(&mut self, episode: usize, rollout: &vicpilco_learn::data::Rollout) {
-        use std::io::Write;
-        self.summary.interaction_s += rollout.len() as f64 * self.dt;
-        let line = serde_json::json!({ "episode": episode, "rollout": rollout });
-        let path = self.dir.join("rollouts.jsonl");
-        let result = writeln!(self.rollouts, "{line}")
-            .and_then(|()| self.rollouts.flush())
-            .map_err(|e| ExperimentError::Io { path, source: e });
-        self.record(result);
-        self.inner.rollout_done(episode, rollout)
-    }
-    fn episode_done(&mut self, record: &vicpilco_learn::outer::EpisodeRecord) {
-        self.summary.episodes.push(record.clone());
-        self.summary.solved_at_episode = solved_at(&self.summary.episodes);
-        self.summary.wall_s = self.started.elapsed().as_secs_f64();
-        let result = self.summary.write(&self.dir).map_err(ExperimentError::from);
-        self.record(result);
-        self.inner.episode_done(record)
-    }
+/// (final x, largest |f|, start y) of an arm roll-out.
+fn arm_extras(r: &vicpilco_learn::data::Rollout) -> (f64, f64, f64) {
+    let final_x = r.true_states.last().map_or(f64::NAN, |s| s[0]);
+    let max_force = r
+        .true_states
+        .iter()
+        .map(|s| s[4].hypot(s[5]))
+        .fold(0.0, f64::max);
+    let start_y = r.true_states.first().map_or(f64::NAN, |s| s[1]);
+    (final_x, max_force, start_y)
 }
 
-fn finish(
+/// A thesis experiment on the arm.
+fn run_arm(
+    name: &str,
+    mut cfg: ArmExperiment,
+    opts: &RunOptions,
+    observer: &mut dyn LoopObserver,
+) -> Result<Summary, ExperimentError> {
+    if opts.quick {
+        cfg.optimiser.length = QUICK_LENGTH;
+    }
+    let identity = serde_json::to_value(ArmExperiment {
+        episodes: 0,
+        ..cfg.clone()
+    })
+    .map_err(|e| ExperimentError::Write(e.into()))?;
+    let planned = cfg.episodes;
+    cfg.episodes = opts.episodes_or(cfg.episodes);
+    let arm_cfg = arm::arm_config(&cfg);
+    let g = &arm_cfg.geometry;
+    let mut config = serde_json::to_value(&cfg).map_err(|e| ExperimentError::Write(e.into()))?;
+    config["geometry"] = serde_json::json!({
+        "wall_x": g.wall_x(),
+        "hole_y": g.hole_center[1],
+        "hole_r": g.hole_radius,
+        "end_x": g.end_x(),
+        "spring_catch_x": g.spring_catch_x(),
+    });
+    if let Some(r) = cfg.start.y_range {
+        config["start_y_range"] = serde_json::json!(r);
+    }
+    config["simulator"] =
+        serde_json::to_value(&arm_cfg).map_err(|e| ExperimentError::Write(e.into()))?;
+    let meta = |policy: String| RunMeta {
+        config: config.clone(),
+        identity: identity.clone(),
+        controller: Some(cfg.controller.to_string()),
+        policy,
+        n_params: cfg.n_params(),
+        extras: Some(arm_extras),
+    };
+    let mut summary = match cfg.policy.kind {
+        PolicyKind::Rbf => {
+            let policy = arm::rbf_policy(&cfg, opts.seed)?;
+            let desc = format!("rbf ({} basis functions, 4 inputs)", policy.n_centres());
+            let (setup, mut env) = arm::setup(&cfg, policy, opts.seed)?;
+            let (summary, outcome) = finish(name, opts, setup, &mut env, observer, meta(desc))?;
+            checks::after_run(&cfg, summary, &outcome, opts)?
+        }
+        PolicyKind::Linear => {
+            let policy = arm::linear_policy(&cfg, opts.seed)?;
+            let (setup, mut env) = arm::setup(&cfg, policy, opts.seed)?;
+            let desc = "linear (4 inputs)".to_string();
+            let (summary, outcome) = finish(name, opts, setup, &mut env, observer, meta(desc))?;
+            checks::after_run(&cfg, summary, &outcome, opts)?
+        }
+    };
+    summary.thesis_reference = checks::thesis_checks(name, &cfg, planned, &summary);
+    summary.write(&opts.out)?;
+    Ok(summary)
+}
+
+/// Run (or resume) the loop with a [`Recorder`] and write the final files.
+fn finish<P>(
     name: &str,
     opts: &RunOptions,
-    setup: LoopSetup<RbfPolicy>,
+    setup: LoopSetup<P>,
     env: &mut dyn Environment,
     observer: &mut dyn LoopObserver,
-    config: String,
-) -> Result<Summary, ExperimentError> {
-    let path = opts.out.join("rollouts.jsonl");
-    let rollouts =
-        std::fs::File::create(&path).map_err(|e| ExperimentError::Io { path, source: e })?;
-    let mut recorder = Recorder {
-        inner: observer,
-        summary: Summary {
+    meta: RunMeta,
+) -> Result<(Summary, LoopOutcome<P>), ExperimentError>
+where
+    P: Policy + Clone + Sync,
+    P::Cache: Send,
+{
+    let checkpoint = if opts.resume {
+        Some(read_checkpoint(&opts.out, name, opts.seed, &meta.identity)?)
+    } else {
+        None
+    };
+    let keep = checkpoint.as_ref().map(|c| c.state.completed);
+    let rollouts = open_jsonl(&opts.out.join("rollouts.jsonl"), keep)?;
+    let predictions = open_jsonl(&opts.out.join("predictions.jsonl"), keep)?;
+    let summary = match &checkpoint {
+        Some(c) => Summary {
+            config: meta.config.clone(),
+            ..c.summary.clone()
+        },
+        None => Summary {
             experiment: name.to_string(),
             seed: opts.seed,
-            policy: format!(
-                "rbf ({} basis functions, {} inputs)",
-                setup.policy.n_centres(),
-                setup.policy.n_inputs()
-            ),
-            n_params: setup.policy.n_free_params(),
+            controller: meta.controller.clone(),
+            policy: meta.policy.clone(),
+            n_params: meta.n_params,
+            initial_return: None,
             episodes: Vec::new(),
             solved_at_episode: None,
             interaction_s: 0.0,
             wall_s: 0.0,
-            config: serde_json::json!({ "scenario": config, "initial_rollouts": setup.initial_rollouts }),
+            config: meta.config.clone(),
+            thesis_reference: Vec::new(),
+            constant_gain_return: None,
+            final_eval: None,
+            final_gains: None,
         },
+    };
+    let labels = PredictionLabels {
+        dt: env.dt(),
+        state_names: env.state_names(),
+        action_names: env.action_names(),
+        w_mean: setup.ret.w_mean,
+        w_energy: setup.ret.energy.as_ref().map_or(0.0, |(_, w)| *w),
+    };
+    let mut recorder = Recorder {
+        inner: observer,
+        wall_before: summary.wall_s,
+        summary,
         dir: opts.out.clone(),
         dt: env.dt(),
+        labels,
+        extras: meta.extras,
+        identity: meta.identity,
         started: Instant::now(),
         rollouts,
+        predictions,
+        current: None,
         error: None,
     };
-    let outcome = setup.run(env, &mut recorder)?;
+    let outcome = match checkpoint {
+        Some(c) => setup.resume(env, &mut recorder, c.state)?,
+        None => setup.run(env, &mut recorder)?,
+    };
     if let Some(e) = recorder.error {
         return Err(e);
     }
     let mut summary = recorder.summary;
-    summary.wall_s = recorder.started.elapsed().as_secs_f64();
+    summary.wall_s = recorder.wall_before + recorder.started.elapsed().as_secs_f64();
     summary.write(&opts.out)?;
     let policy = serde_json::json!({
         "policy": summary.policy,
@@ -222,5 +349,5 @@ fn finish(
         "dynamics_hyp": outcome.dynamics_hyp,
     });
     write_json_atomic(&opts.out.join("policy.json"), &policy)?;
-    Ok(summary)
+    Ok((summary, outcome))
 }

@@ -1,18 +1,65 @@
 //! `summary.json`: what a run did, episode by episode.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::path::Path;
 use vicpilco_learn::outer::EpisodeRecord;
 
+/// One policy update as `summary.json` lists it: the loop's record plus what the task adds.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct EpisodeSummary {
+    #[serde(flatten)]
+    pub record: EpisodeRecord,
+    /// `green`: every roll-out of the update succeeded, `yellow`: some, `red`: none (the
+    /// thesis's Figs. 5-6, 5-7, 5-12).
+    pub colour: String,
+    /// Arm runs, first roll-out: x at the end (m), largest |f| over the steps (N), start y (m).
+    pub final_x: Option<f64>,
+    pub max_force: Option<f64>,
+    pub start_y: Option<f64>,
+}
+
+impl std::ops::Deref for EpisodeSummary {
+    type Target = EpisodeRecord;
+    fn deref(&self) -> &EpisodeRecord {
+        &self.record
+    }
+}
+
+/// The colour of an update with this fraction of successful roll-outs.
+pub fn colour(success_fraction: f64) -> &'static str {
+    if success_fraction >= 1.0 {
+        "green"
+    } else if success_fraction > 0.0 {
+        "yellow"
+    } else {
+        "red"
+    }
+}
+
+/// One of the thesis's claims next to what the run measured.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ThesisCheck {
+    pub claim: String,
+    /// What the thesis reports.
+    pub thesis: String,
+    pub measured: String,
+    /// `None` when the run is too short to decide.
+    pub pass: Option<bool>,
+}
+
 /// The run summary written to `DIR/summary.json`.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Summary {
     pub experiment: String,
     pub seed: u64,
+    /// Impedance law of arm runs (`gic`, `sic`); `null` otherwise.
+    pub controller: Option<String>,
     pub policy: String,
     /// Learnable policy parameters.
     pub n_params: usize,
-    pub episodes: Vec<EpisodeRecord>,
+    /// Recorded return of the first initial (exploration) roll-out.
+    pub initial_return: Option<f64>,
+    pub episodes: Vec<EpisodeSummary>,
     /// The first policy update at which the success test had held for the last
     /// [`SOLVED_STREAK`] consecutive updates; `null` if never.
     pub solved_at_episode: Option<usize>,
@@ -22,13 +69,31 @@ pub struct Summary {
     pub wall_s: f64,
     /// The settings the run used (every number, ours marked in the docs).
     pub config: serde_json::Value,
+    /// The thesis's numbers for this experiment beside the run's.
+    pub thesis_reference: Vec<ThesisCheck>,
+    /// VIL runs: the recorded return of one roll-out with constant gains
+    /// ([`crate::checks::CONSTANT_GAIN`]) on the same simulator.
+    pub constant_gain_return: Option<f64>,
+    /// Runs with evaluation starts: the final policy from fresh starts.
+    pub final_eval: Option<FinalEval>,
+    /// Arm runs: mean (k_x, k_y) of the last learned roll-out over its first and its last
+    /// [`crate::checks::GAIN_WINDOW_S`] seconds.
+    pub final_gains: Option<[[f64; 2]; 2]>,
+}
+
+/// The final policy from fresh starts (`final_eval.jsonl` holds the roll-outs).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FinalEval {
+    pub starts: usize,
+    pub successes: usize,
+    pub fraction: f64,
 }
 
 /// Consecutive successful updates that count as "solved".
 pub const SOLVED_STREAK: usize = 3;
 
 /// The update at which the last [`SOLVED_STREAK`] updates all succeeded, if any.
-pub fn solved_at(episodes: &[EpisodeRecord]) -> Option<usize> {
+pub fn solved_at<E: std::ops::Deref<Target = EpisodeRecord>>(episodes: &[E]) -> Option<usize> {
     let mut streak = 0;
     for e in episodes {
         streak = if e.success { streak + 1 } else { 0 };
@@ -85,7 +150,14 @@ pub fn write_json_atomic(path: &Path, value: &serde_json::Value) -> Result<(), W
         source: e,
     };
     let tmp = path.with_extension("json.tmp");
-    std::fs::write(&tmp, serde_json::to_vec_pretty(value)?).map_err(io)?;
+    {
+        use std::io::Write;
+        let mut f = std::fs::File::create(&tmp).map_err(io)?;
+        f.write_all(&serde_json::to_vec_pretty(value)?)
+            .map_err(io)?;
+        // The data must be on disk before the rename makes it the file.
+        f.sync_all().map_err(io)?;
+    }
     std::fs::rename(&tmp, path).map_err(io)
 }
 
@@ -100,6 +172,8 @@ mod tests {
             predicted_return_std: 0.1,
             recorded_return: 1.0,
             success,
+            rollouts: 1,
+            success_fraction: if success { 1.0 } else { 0.0 },
             interaction_s: 4.0,
             train_s: 0.1,
             optimise_s: 1.0,
@@ -119,7 +193,7 @@ mod tests {
         let eps: Vec<_> = flags
             .iter()
             .enumerate()
-            .map(|(i, &s)| ep(i + 1, s))
+            .map(|(i, &s)| Box::new(ep(i + 1, s)))
             .collect();
         assert_eq!(solved_at(&eps), Some(7));
         assert_eq!(solved_at(&eps[..6]), None);
@@ -132,13 +206,25 @@ mod tests {
         let s = Summary {
             experiment: "x".into(),
             seed: 1,
+            controller: None,
             policy: "rbf".into(),
             n_params: 3,
-            episodes: vec![e],
+            initial_return: None,
+            episodes: vec![EpisodeSummary {
+                record: e,
+                colour: "green".into(),
+                final_x: None,
+                max_force: None,
+                start_y: None,
+            }],
             solved_at_episode: None,
             interaction_s: 0.0,
             wall_s: 0.0,
             config: serde_json::Value::Null,
+            thesis_reference: Vec::new(),
+            constant_gain_return: None,
+            final_eval: None,
+            final_gains: None,
         };
         let dir = std::env::temp_dir();
         assert!(matches!(s.write(&dir), Err(WriteError::NonFinite { .. })));

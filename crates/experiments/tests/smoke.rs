@@ -9,6 +9,7 @@ fn run_once(dir: &std::path::Path, seed: u64) -> serde_json::Value {
         out: dir.to_path_buf(),
         episodes: Some(2),
         quick: false,
+        ..Default::default()
     };
     let summary = run("pendulum", &opts, &mut ()).expect("pendulum run");
     assert_eq!(summary.episodes.len(), 2);
@@ -74,6 +75,7 @@ fn unknown_experiment_is_an_error_naming_it() {
         out: std::env::temp_dir().join("vicpilco-unknown"),
         episodes: Some(1),
         quick: false,
+        ..Default::default()
     };
     let err = run("swing-a-cat", &opts, &mut ()).unwrap_err().to_string();
     assert!(
@@ -82,17 +84,44 @@ fn unknown_experiment_is_an_error_naming_it() {
     );
 }
 
-/// `vicpilco run vil-gic --quick`: three short policy updates on the arm, every file written.
+fn read(path: &std::path::Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// summary.json without the wall-clock timings, which differ between any two runs.
+fn summary_without_timings(dir: &std::path::Path) -> serde_json::Value {
+    let mut v: serde_json::Value = serde_json::from_str(&read(&dir.join("summary.json"))).unwrap();
+    v.as_object_mut().unwrap().remove("wall_s");
+    for e in v["episodes"].as_array_mut().unwrap() {
+        let e = e.as_object_mut().unwrap();
+        e.remove("train_s");
+        e.remove("optimise_s");
+    }
+    // The time bar's measured value is a wall time too.
+    for c in v["thesis_reference"].as_array_mut().unwrap() {
+        if c["claim"].as_str().unwrap().contains("wall time") {
+            c.as_object_mut().unwrap().remove("measured");
+            c.as_object_mut().unwrap().remove("pass");
+        }
+    }
+    v
+}
+
+/// `vicpilco run vil-gic --quick`: three short policy updates on the arm write every file; a
+/// run stopped after update 1 and resumed ends with the same files, timings excepted.
 #[test]
-fn vil_gic_quick_run_writes_its_summary() {
-    let dir = std::env::temp_dir().join(format!("vicpilco-vil-quick-{}", std::process::id()));
-    let opts = RunOptions {
+fn vil_gic_quick_run_writes_every_file_and_resumes_bit_for_bit() {
+    let base = std::env::temp_dir().join(format!("vicpilco-vil-quick-{}", std::process::id()));
+    let (full, split) = (base.join("full"), base.join("split"));
+    let opts = |out: &std::path::Path, episodes: Option<usize>, resume: bool| RunOptions {
         seed: 1,
-        out: dir.clone(),
-        episodes: None,
+        out: out.to_path_buf(),
+        episodes,
         quick: true,
+        resume,
+        ..Default::default()
     };
-    let summary = run("vil-gic", &opts, &mut ()).expect("vil-gic quick run");
+    let summary = run("vil-gic", &opts(&full, None, false), &mut ()).expect("vil-gic quick run");
     assert_eq!(summary.episodes.len(), vicpilco_experiments::QUICK_EPISODES);
     for e in &summary.episodes {
         assert!(
@@ -101,7 +130,60 @@ fn vil_gic_quick_run_writes_its_summary() {
         );
         assert!(e.recorded_return.is_finite() && e.recorded_return > 0.0);
         assert!(e.objective_end <= e.objective_start);
+        assert!(["green", "yellow", "red"].contains(&e.colour.as_str()));
+        assert!(e.final_x.is_some_and(|x| x > 0.5) && e.max_force.is_some());
     }
-    assert!(dir.join("summary.json").is_file() && dir.join("rollouts.jsonl").is_file());
+    assert_eq!(summary.n_params, 68);
+    assert!(summary.initial_return.is_some() && summary.constant_gain_return.is_some());
+    assert!(!summary.thesis_reference.is_empty());
+    for file in ["summary.json", "checkpoint.json", "policy.json"] {
+        assert!(full.join(file).is_file(), "{file} missing");
+    }
+    assert_eq!(read(&full.join("rollouts.jsonl")).lines().count(), 4);
+    assert_eq!(read(&full.join("predictions.jsonl")).lines().count(), 3);
+
+    run("vil-gic", &opts(&split, Some(1), false), &mut ()).expect("first part");
+    // Settings other than the number of updates must match.
+    let changed = base.join("changed.toml");
+    let text = vicpilco_experiments::config::shipped("vil-gic").unwrap().1;
+    std::fs::write(&changed, text.replace("w_std = -0.25", "w_std = -0.5")).unwrap();
+    let err = run(
+        "vil-gic",
+        &RunOptions {
+            config: Some(changed),
+            ..opts(&split, None, true)
+        },
+        &mut (),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("cost.w_std"), "{err}");
+    run("vil-gic", &opts(&split, None, true), &mut ()).expect("resumed part");
+
+    assert_eq!(
+        summary_without_timings(&full),
+        summary_without_timings(&split)
+    );
+    for file in ["rollouts.jsonl", "predictions.jsonl", "policy.json"] {
+        assert!(
+            read(&full.join(file)) == read(&split.join(file)),
+            "{file} differs after resume"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&base);
+}
+
+#[test]
+fn resuming_without_a_checkpoint_is_an_error_naming_the_file() {
+    let dir = std::env::temp_dir().join(format!("vicpilco-no-checkpoint-{}", std::process::id()));
+    let opts = RunOptions {
+        seed: 1,
+        out: dir.clone(),
+        quick: true,
+        resume: true,
+        ..Default::default()
+    };
+    let err = run("vil-gic", &opts, &mut ()).unwrap_err().to_string();
+    assert!(err.contains("checkpoint.json"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

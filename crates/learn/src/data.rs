@@ -17,7 +17,7 @@ pub struct Rollout {
     /// cannot tell).
     pub true_states: Vec<Vec<f64>>,
     /// Per step: flags (e.g. `in_hole`) and named values the system reported.
-    #[serde(skip)]
+    #[serde(default)]
     pub infos: Vec<StepInfo>,
     /// Whether this roll-out's transitions were added to the GP training set.
     pub used_for_training: bool,

@@ -5,11 +5,13 @@
 //!   backward;
 //! * [`value`]: the expected return over a horizon and `dJ/dψ` by one reverse sweep;
 //! * [`data`]: roll-outs and the GP training set built from them;
-//! * [`outer`]: the learning loop over an [`vicpilco_env::Environment`].
+//! * [`outer`]: the learning loop over an [`vicpilco_env::Environment`], with checkpoints;
+//! * [`start`]: start distributions of the real episodes.
 
 pub mod data;
 pub mod joint;
 pub mod outer;
+pub mod start;
 pub mod step;
 pub mod value;
 

@@ -6,17 +6,15 @@
 //! from the master seed per (episode, purpose), so an episode can be reproduced alone.
 
 use crate::data::{augment, initial_hyper, training_set, Rollout};
+use crate::start::StartDistribution;
 use crate::step::{Predictor, StepSpec};
 use crate::value::{value, ReturnSpec, ValueOut};
 use crate::LearnError;
 use faer::Mat;
-use rand::SeedableRng;
-use rand_distr::{Distribution, StandardNormal};
 use std::time::Instant;
 use vicpilco_env::Environment;
-use vicpilco_gp::linalg::Chol;
 use vicpilco_gp::moments::MmModel;
-use vicpilco_gp::train::{minimize, MinimizeOptions, Termination};
+use vicpilco_gp::train::{minimize, MinimizeOptions, Termination, Wolfe};
 use vicpilco_gp::{DynamicsModel, DynamicsOptions, Hyper};
 use vicpilco_pilco::policy::Policy;
 use vicpilco_pilco::squash::{PartialSat, TrigAug};
@@ -30,6 +28,8 @@ pub struct OptimiserOptions {
     pub mfepls: u64,
     /// L-BFGS memory.
     pub memory: usize,
+    /// Line-search acceptance ([`Wolfe::PILCO`]: PILCO's more exact line searches).
+    pub wolfe: Wolfe,
 }
 
 /// What the loop does between roll-outs, reported to an observer.
@@ -46,8 +46,14 @@ pub trait LoopObserver {
     fn phase(&mut self, _episode: usize, _phase: Phase) {}
     fn objective(&mut self, _episode: usize, _j: f64) {}
     fn episode_done(&mut self, _record: &EpisodeRecord) {}
-    /// Every roll-out as soon as it is recorded (initial ones with `episode` 0).
-    fn rollout_done(&mut self, _episode: usize, _rollout: &Rollout) {}
+    /// Every roll-out as soon as it is recorded (initial ones with `episode` 0), with its
+    /// weighted immediate cost per step ([`LoopSetup::recorded_costs`]).
+    fn rollout_done(&mut self, _episode: usize, _rollout: &Rollout, _costs: &[f64]) {}
+    /// The long-term prediction of the policy an update optimised.
+    fn predicted(&mut self, _episode: usize, _prediction: &ValueOut) {}
+    /// Everything needed to continue after an update, handed over once it is complete (the
+    /// initial roll-outs count as update 0).
+    fn checkpoint(&mut self, _state: &LoopState) {}
 }
 
 impl LoopObserver for () {}
@@ -67,15 +73,18 @@ pub struct LoopSetup<P> {
     /// Start distributions the predicted return is averaged over (K).
     pub prediction_starts: Vec<(Vec<f64>, Mat<f64>)>,
     /// Distribution the system's real start states are drawn from.
-    pub env_start: (Vec<f64>, Mat<f64>),
+    pub env_start: StartDistribution,
     /// Known prior mean of the GP targets per step (H rows of D0), if any.
     pub prior_shift: Option<Vec<Vec<f64>>>,
     pub dynamics: DynamicsOptions,
     pub optimiser: OptimiserOptions,
     /// Roll-outs with the exploration policy before learning.
     pub initial_rollouts: usize,
-    /// Policy updates, one roll-out each.
+    /// Policy updates.
     pub episodes: usize,
+    /// Roll-outs after each update; only the first adds data to the GP, all count for
+    /// [`EpisodeRecord::success_fraction`].
+    pub rollouts_per_episode: usize,
     pub policy: P,
     /// The initial roll-outs' actions: `(seed, t, observation) → action`.
     pub explore: ExplorePolicy,
@@ -97,7 +106,11 @@ pub struct EpisodeRecord {
     pub predicted_return_std: f64,
     /// The same weighted cost evaluated on the recorded (true) states and actions.
     pub recorded_return: f64,
+    /// The success test on the first roll-out.
     pub success: bool,
+    /// Roll-outs after this update and the fraction of them that succeeded.
+    pub rollouts: usize,
+    pub success_fraction: f64,
     /// System time of the roll-out, seconds.
     pub interaction_s: f64,
     pub train_s: f64,
@@ -126,6 +139,23 @@ pub struct LoopOutcome<P> {
     pub predictions: Vec<ValueOut>,
 }
 
+/// The loop between updates: enough to continue a stopped run bit for bit (every random
+/// stream is derived from the master seed and the episode, so no generator state is kept).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct LoopState {
+    /// Updates completed (0: only the initial roll-outs).
+    pub completed: usize,
+    /// The GP's training roll-outs, in order.
+    pub data: Vec<Rollout>,
+    /// Dynamics hyper-parameters of the last fit (the next fit's warm start).
+    pub hyp: Option<Vec<Hyper>>,
+    /// Inducing inputs of the last sparse fit, rows (the next sparse fit's warm start).
+    pub inducing: Option<Vec<Vec<f64>>>,
+    /// The current policy's parameters.
+    pub policy_params: Vec<f64>,
+    pub episodes: Vec<EpisodeRecord>,
+}
+
 /// SplitMix64 of (master seed, episode, purpose): independent streams without stored state.
 pub fn derive_seed(master: u64, episode: u64, purpose: u64) -> u64 {
     let mut z = master
@@ -139,22 +169,8 @@ pub fn derive_seed(master: u64, episode: u64, purpose: u64) -> u64 {
 const PURPOSE_START: u64 = 1;
 const PURPOSE_NOISE: u64 = 2;
 const PURPOSE_EXPLORE: u64 = 3;
-
-/// A draw from `N(m, s)` (s may be singular: zero-variance dimensions stay at the mean).
-pub fn sample_gaussian(m: &[f64], s: &Mat<f64>, seed: u64) -> Result<Vec<f64>, LearnError> {
-    let d = m.len();
-    // A deterministic start (zero covariance) has no Cholesky factor to draw with.
-    if (0..d).all(|i| (0..d).all(|j| s[(i, j)] == 0.0)) {
-        return Ok(m.to_vec());
-    }
-    let mut rng = rand::rngs::ChaCha8Rng::seed_from_u64(seed);
-    let z: Vec<f64> = (0..d).map(|_| StandardNormal.sample(&mut rng)).collect();
-    let chol = Chol::with_jitter(s.as_ref(), "start-state covariance", Default::default())?;
-    let l = chol.l();
-    Ok((0..d)
-        .map(|i| m[i] + (0..=i).map(|k| l[(i, k)] * z[k]).sum::<f64>())
-        .collect())
-}
+/// Roll-out j ≥ 1 of an update uses purpose `PURPOSE_EXTRA_ROLLOUT + j` for its sub-seed.
+const PURPOSE_EXTRA_ROLLOUT: u64 = 100;
 
 /// Run one episode on the system with `act(t, observation) → action`.
 pub fn rollout(
@@ -215,9 +231,10 @@ where
         }
     }
 
-    /// The weighted cost of a recorded roll-out (true states), as the predicted return
-    /// counts it.
-    pub fn recorded_return(&self, r: &Rollout) -> f64 {
+    /// The weighted immediate cost `w1 c(x_{t+1}) + w3 c_a(a_t)` of each step of a recorded
+    /// roll-out (true states), undiscounted: what the prediction's
+    /// [`crate::value::PredictedStep`] means are compared with.
+    pub fn recorded_costs(&self, r: &Rollout) -> Vec<f64> {
         let trig = (!self.ret.cost_angles.is_empty()).then(|| {
             TrigAug::new(
                 self.spec.state_dim,
@@ -226,23 +243,32 @@ where
             )
             .expect("validated")
         });
-        let mut total = 0.0;
-        for t in 0..r.len() {
-            let disc = self.ret.gamma.powi(t as i32 + 1);
-            let x = &r.true_states[t + 1];
-            let mut xa = x.clone();
-            if let Some(tr) = &trig {
-                xa.extend(tr.apply(x));
-            }
-            let c = self.ret.state_cost.as_ref().map_or(0.0, |c| c.eval(&xa));
-            let ca = self
-                .ret
-                .energy
-                .as_ref()
-                .map_or(0.0, |(e, w)| w * e.eval(&r.actions[t]));
-            total += disc * (self.ret.w_mean * c + ca);
-        }
-        total
+        (0..r.len())
+            .map(|t| {
+                let x = &r.true_states[t + 1];
+                let mut xa = x.clone();
+                if let Some(tr) = &trig {
+                    xa.extend(tr.apply(x));
+                }
+                let c = self.ret.state_cost.as_ref().map_or(0.0, |c| c.eval(&xa));
+                let ca = self
+                    .ret
+                    .energy
+                    .as_ref()
+                    .map_or(0.0, |(e, w)| w * e.eval(&r.actions[t]));
+                self.ret.w_mean * c + ca
+            })
+            .collect()
+    }
+
+    /// The return of a recorded roll-out, as the predicted return counts it (discounted sum of
+    /// [`Self::recorded_costs`]).
+    pub fn recorded_return(&self, r: &Rollout) -> f64 {
+        self.recorded_costs(r)
+            .iter()
+            .enumerate()
+            .map(|(t, c)| self.ret.gamma.powi(t as i32 + 1) * c)
+            .sum()
     }
 
     fn predicted(&self, out: &ValueOut) -> (f64, f64) {
@@ -258,22 +284,19 @@ where
         (mean, std)
     }
 
-    /// Run the whole loop on `env`.
+    /// Run the whole loop on `env`: the initial roll-outs, then every update.
     pub fn run(
-        mut self,
+        self,
         env: &mut dyn Environment,
         observer: &mut dyn LoopObserver,
     ) -> Result<LoopOutcome<P>, LearnError> {
-        let trig = self.trig();
         let mut data: Vec<Rollout> = Vec::new();
         for i in 0..self.initial_rollouts {
             observer.phase(0, Phase::InitialRollout);
             let k = i as u64;
-            let start = sample_gaussian(
-                &self.env_start.0,
-                &self.env_start.1,
-                derive_seed(self.seed, k, PURPOSE_START),
-            )?;
+            let start = self
+                .env_start
+                .sample(derive_seed(self.seed, k, PURPOSE_START))?;
             let es = derive_seed(self.seed, k, PURPOSE_EXPLORE);
             let explore = &self.explore;
             let r = rollout(
@@ -282,16 +305,50 @@ where
                 derive_seed(self.seed, k, PURPOSE_NOISE),
                 |t, obs| Ok(explore(es, t, obs)),
             )?;
-            observer.rollout_done(0, &r);
+            observer.rollout_done(0, &r, &self.recorded_costs(&r));
             data.push(r);
         }
         let initial = data.clone();
-        let mut hyp: Option<Vec<Hyper>> = None;
-        let mut inducing: Option<Mat<f64>> = None;
-        let mut episodes = Vec::with_capacity(self.episodes);
-        let mut rollouts = Vec::with_capacity(self.episodes);
-        let mut predictions = Vec::with_capacity(self.episodes);
-        for ep in 1..=self.episodes {
+        let state = LoopState {
+            completed: 0,
+            data,
+            hyp: None,
+            inducing: None,
+            policy_params: self.policy.params(),
+            episodes: Vec::new(),
+        };
+        observer.checkpoint(&state);
+        let mut outcome = self.resume(env, observer, state)?;
+        outcome.initial = initial;
+        Ok(outcome)
+    }
+
+    /// Continue the loop from a checkpoint (the state a [`LoopObserver::checkpoint`] received)
+    /// up to `self.episodes` updates. Given the same set-up, the updates it runs are bit for
+    /// bit those of an uninterrupted run.
+    pub fn resume(
+        mut self,
+        env: &mut dyn Environment,
+        observer: &mut dyn LoopObserver,
+        state: LoopState,
+    ) -> Result<LoopOutcome<P>, LearnError> {
+        let trig = self.trig();
+        self.policy.set_params(&state.policy_params)?;
+        let LoopState {
+            completed,
+            mut data,
+            mut hyp,
+            inducing,
+            mut episodes,
+            ..
+        } = state;
+        let mut inducing: Option<Mat<f64>> = match inducing {
+            Some(rows) => Some(mat_from_rows(&rows, "checkpoint inducing inputs")?),
+            None => None,
+        };
+        let mut rollouts = Vec::new();
+        let mut predictions = Vec::new();
+        for ep in completed + 1..=self.episodes {
             // Train the dynamics model.
             observer.phase(ep, Phase::Train);
             let t0 = Instant::now();
@@ -341,6 +398,7 @@ where
                 rel_tol: 1e-10,
                 memory: self.optimiser.memory,
                 max_line_search_evals: Some(self.optimiser.mfepls),
+                wolfe: self.optimiser.wolfe,
             };
             let result = minimize(&mut objective, p0, &opts).ok_or_else(|| {
                 LearnError::NonFinite("the predicted return at the current policy".into())
@@ -356,30 +414,51 @@ where
             )?;
             let out = value(&pred, &self.ret, &self.prediction_starts, false)?;
             let (predicted_mean, predicted_std) = self.predicted(&out);
+            observer.predicted(ep, &out);
             predictions.push(out);
 
-            // Roll out.
+            // Roll out: the first roll-out feeds the GP, further ones only test the policy.
             observer.phase(ep, Phase::Rollout);
             let k = (self.initial_rollouts + ep) as u64;
-            let start = sample_gaussian(
-                &self.env_start.0,
-                &self.env_start.1,
-                derive_seed(self.seed, k, PURPOSE_START),
-            )?;
-            let policy = &self.policy;
-            let me = &self;
-            let r = rollout(
-                env,
-                &start,
-                derive_seed(self.seed, k, PURPOSE_NOISE),
-                |t, obs| Ok(me.act(policy, trig.as_ref(), t, obs)),
-            )?;
+            let n_rollouts = self.rollouts_per_episode.max(1);
+            let mut successes = 0usize;
+            let mut first: Option<(Rollout, bool)> = None;
+            for j in 0..n_rollouts {
+                // The first roll-out keeps the master seed's streams, so runs with one
+                // roll-out per update are unchanged by extra ones.
+                let base = if j == 0 {
+                    self.seed
+                } else {
+                    derive_seed(self.seed, k, PURPOSE_EXTRA_ROLLOUT + j as u64)
+                };
+                let start = self.env_start.sample(derive_seed(base, k, PURPOSE_START))?;
+                let policy = &self.policy;
+                let me = &self;
+                let mut r = rollout(
+                    env,
+                    &start,
+                    derive_seed(base, k, PURPOSE_NOISE),
+                    |t, obs| Ok(me.act(policy, trig.as_ref(), t, obs)),
+                )?;
+                r.used_for_training = j == 0;
+                let ok = (self.success)(&r);
+                successes += usize::from(ok);
+                observer.rollout_done(ep, &r, &self.recorded_costs(&r));
+                if j == 0 {
+                    first = Some((r, ok));
+                } else {
+                    rollouts.push(r);
+                }
+            }
+            let (r, success) = first.expect("at least one roll-out per update");
             let record = EpisodeRecord {
                 index: ep,
                 predicted_return_mean: predicted_mean,
                 predicted_return_std: predicted_std,
                 recorded_return: self.recorded_return(&r),
-                success: (self.success)(&r),
+                success,
+                rollouts: n_rollouts,
+                success_fraction: successes as f64 / n_rollouts as f64,
                 interaction_s: r.len() as f64 * env.dt(),
                 train_s,
                 optimise_s,
@@ -396,16 +475,24 @@ where
                 j = result.value,
                 recorded = record.recorded_return,
                 success = record.success,
+                success_fraction = record.success_fraction,
                 "policy update done"
             );
-            observer.rollout_done(ep, &r);
             observer.episode_done(&record);
             episodes.push(record);
             data.push(r.clone());
             rollouts.push(r);
+            observer.checkpoint(&LoopState {
+                completed: ep,
+                data: data.clone(),
+                hyp: hyp.clone(),
+                inducing: inducing.as_ref().map(mat_rows),
+                policy_params: self.policy.params(),
+                episodes: episodes.clone(),
+            });
         }
         Ok(LoopOutcome {
-            initial,
+            initial: Vec::new(),
             episodes,
             rollouts,
             policy: self.policy,
@@ -413,6 +500,23 @@ where
             predictions,
         })
     }
+}
+
+fn mat_rows(m: &Mat<f64>) -> Vec<Vec<f64>> {
+    (0..m.nrows())
+        .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
+        .collect()
+}
+
+fn mat_from_rows(rows: &[Vec<f64>], what: &str) -> Result<Mat<f64>, LearnError> {
+    let n = rows.first().map_or(0, Vec::len);
+    if let Some(i) = rows.iter().position(|r| r.len() != n) {
+        return Err(LearnError::Spec(format!(
+            "{what}: row {i} has {} entries, row 0 has {n}",
+            rows[i].len()
+        )));
+    }
+    Ok(Mat::from_fn(rows.len(), n, |i, j| rows[i][j]))
 }
 
 fn termination_text(t: &Termination) -> String {

@@ -1,0 +1,358 @@
+//! The thesis's peg-in-hole experiments on the simulated arm, built from an
+//! [`ArmExperiment`] config: VIL (§5-4: stiffness (k_x, k_y) along the given min-jerk plan, time
+//! as a GP input, the plan's increments as the prior mean of the relative targets) and VILTA
+//! (§5-5: stiffness and reference increments (Δx_ref, Δy_ref), no time input, zero prior mean,
+//! the scene shifted so the cost target is reachable).
+//!
+//! Fixed by the thesis and not configurable: the state (x, y, ẋ, ẏ, f_x, f_y), the policy
+//! inputs (x, y, ẋ, ẏ), relative targets for the kinematic states and absolute ones for the
+//! forces (§4-1-1), the force cost on (f_x, f_y) with target 0.
+
+use crate::config::{ArmExperiment, PolicyKind, PriorMean, Task};
+use crate::ExperimentError;
+use faer::Mat;
+use rand::SeedableRng;
+use rand_distr::{Distribution, StandardNormal};
+use std::sync::Mutex;
+use vicpilco_env::arm::{ActionMode, ArmConfig, ArmEnv, OuParams, RefPoint, ViaPlan};
+use vicpilco_gp::sparse::SparseTrainOptions;
+use vicpilco_gp::train::Wolfe;
+use vicpilco_gp::{DynamicsOptions, TrainOptions};
+use vicpilco_learn::data::Rollout;
+use vicpilco_learn::outer::{derive_seed, ExplorePolicy, LoopSetup, OptimiserOptions};
+use vicpilco_learn::start::StartDistribution;
+use vicpilco_learn::step::{StepSpec, Target};
+use vicpilco_learn::value::ReturnSpec;
+use vicpilco_pilco::cost::{CostSum, EnergyCost, SaturatingCost};
+use vicpilco_pilco::policy::{LinearPolicy, RbfPolicy};
+use vicpilco_pilco::squash::{PartialSat, SatRange};
+
+/// Seed purpose of the policy initialisation (see [`derive_seed`]).
+const PURPOSE_POLICY_INIT: u64 = 11;
+/// Seed purpose of the final policy's evaluation starts and noise.
+pub const PURPOSE_EVALUATION: u64 = 12;
+
+/// Index of the time entry in the augmented state (x, y, ẋ, ẏ, f_x, f_y, t).
+const TIME_INDEX: usize = 6;
+
+fn diag(v: &[f64]) -> Mat<f64> {
+    Mat::from_fn(v.len(), v.len(), |i, j| if i == j { v[i] } else { 0.0 })
+}
+
+/// The simulator configuration of an experiment: the default arm (noise and 15 % mismatch on)
+/// with the experiment's controller, step, horizon and, for VILTA, action layout and shifted
+/// scene.
+pub fn arm_config(cfg: &ArmExperiment) -> ArmConfig {
+    let mut arm = ArmConfig {
+        controller: cfg.controller,
+        step_dt: cfg.dt,
+        horizon: cfg.horizon,
+        ..ArmConfig::default()
+    };
+    if let (Task::Vilta, Some(v)) = (cfg.task, &cfg.vilta) {
+        arm.mode = ActionMode::Vilta {
+            delta_max: cfg.policy.delta_max.unwrap_or(0.0),
+            delta_tick: v.delta_tick,
+        };
+        arm.geometry = arm.geometry.shifted(v.geometry_shift_x, 0.0);
+    }
+    arm
+}
+
+/// The path the initial roll-out follows: the VIL plan, or the VILTA scan through its via
+/// points starting at `origin` (the start position).
+/// A reference path as a function of time.
+type Path = Box<dyn Fn(f64) -> RefPoint + Send + Sync>;
+
+fn initial_path(cfg: &ArmExperiment, arm: &ArmConfig, origin: [f64; 2]) -> Path {
+    match &cfg.initial.scan {
+        Some(scan) => {
+            let mut points: Vec<[f64; 3]> = scan.iter().map(|r| [r[1], r[2], 0.0]).collect();
+            points[0] = [origin[0], origin[1], 0.0];
+            let plan = ViaPlan {
+                points,
+                times: scan.iter().map(|r| r[0]).collect(),
+            };
+            Box::new(move |t| plan.eval(t))
+        }
+        None => {
+            let reference = arm.reference.clone();
+            Box::new(move |t| reference.eval(t))
+        }
+    }
+}
+
+/// The learning problem's every part except the policy.
+struct Problem {
+    spec: StepSpec,
+    squash: PartialSat,
+    ret: ReturnSpec,
+    prior_shift: Option<Vec<Vec<f64>>>,
+    prediction_starts: Vec<(Vec<f64>, Mat<f64>)>,
+    env_start: StartDistribution,
+    explore: ExplorePolicy,
+}
+
+fn problem(cfg: &ArmExperiment, arm: &ArmConfig) -> Result<Problem, ExperimentError> {
+    let m = cfg.n_actions();
+    let mut dyn_inputs = vec![0, 1, 2, 3];
+    if cfg.gp.time_input {
+        dyn_inputs.push(TIME_INDEX);
+    }
+    let spec = StepSpec {
+        state_dim: 6,
+        angles: vec![],
+        time_input: cfg.gp.time_input,
+        policy_inputs: vec![0, 1, 2, 3],
+        dyn_inputs,
+        targets: vec![
+            Target::Relative,
+            Target::Relative,
+            Target::Relative,
+            Target::Relative,
+            Target::Absolute,
+            Target::Absolute,
+        ],
+        dt: cfg.dt,
+    };
+    let prior_shift = match cfg.gp.prior_mean {
+        PriorMean::Zero => None,
+        PriorMean::Reference => {
+            let r = &arm.reference;
+            Some(
+                (0..cfg.horizon)
+                    .map(|t| {
+                        let (a, b) = (r.eval(t as f64 * cfg.dt), r.eval((t + 1) as f64 * cfg.dt));
+                        vec![
+                            b.x[0] - a.x[0],
+                            b.x[1] - a.x[1],
+                            b.xd[0] - a.xd[0],
+                            b.xd[1] - a.xd[1],
+                            0.0,
+                            0.0,
+                        ]
+                    })
+                    .collect(),
+            )
+        }
+    };
+    let c = &cfg.cost;
+    let pos_dims: Vec<usize> = c
+        .position_dims
+        .iter()
+        .map(|d| usize::from(d == "y"))
+        .collect();
+    let pos_w = 1.0 / (c.position_width * c.position_width);
+    let f_w = 1.0 / (c.force_width * c.force_width);
+    let costs = vec![
+        SaturatingCost::new(
+            &pos_dims,
+            diag(&vec![pos_w; pos_dims.len()]).as_ref(),
+            &c.position_target,
+        )?,
+        SaturatingCost::new(&[4, 5], diag(&[f_w, f_w]).as_ref(), &[0.0, 0.0])?,
+    ];
+    let k_range = SatRange::Bounded {
+        a_min: cfg.policy.k_min,
+        a_max: cfg.policy.k_max,
+    };
+    let (ranges, a_max, penalised) = match cfg.task {
+        Task::Vil => (
+            vec![k_range; 2],
+            vec![cfg.policy.k_max; 2],
+            vec![true, true],
+        ),
+        Task::Vilta => {
+            let d = cfg.policy.delta_max.unwrap_or(0.0);
+            (
+                vec![
+                    k_range,
+                    k_range,
+                    SatRange::Symmetric { a_max: d },
+                    SatRange::Symmetric { a_max: d },
+                ],
+                vec![cfg.policy.k_max, cfg.policy.k_max, d, d],
+                vec![true, true, false, false],
+            )
+        }
+    };
+    let squash = PartialSat::new(m, &(0..m).collect::<Vec<_>>(), &ranges)?;
+    let ret = ReturnSpec {
+        state_cost: Some(CostSum::new(6, costs)?),
+        cost_angles: vec![],
+        w_mean: 1.0,
+        w_std: c.w_std,
+        energy: Some((EnergyCost::new(&a_max, &penalised)?, c.w_energy)),
+        gamma: 1.0,
+        horizon: cfg.horizon,
+    };
+    let s = &cfg.start;
+    let start_cov = diag(&s.prediction_std.map(|v| v * v));
+    let prediction_starts = match &s.prediction_y {
+        Some(ys) => ys
+            .iter()
+            .map(|&y| {
+                let mut mean = s.state.to_vec();
+                mean[1] = y;
+                (mean, start_cov.clone())
+            })
+            .collect(),
+        None => vec![(s.state.to_vec(), start_cov)],
+    };
+    let env_start = match s.y_range {
+        Some([lo, hi]) => {
+            let (mut a, mut b) = (s.state.to_vec(), s.state.to_vec());
+            a[1] = lo;
+            b[1] = hi;
+            StartDistribution::Uniform { lo: a, hi: b }
+        }
+        None => StartDistribution::fixed(&s.state),
+    };
+    let ou = OuParams {
+        a_min: cfg.policy.k_min,
+        a_max: cfg.policy.k_max,
+        theta: cfg.initial.ou_theta,
+        dt: cfg.dt,
+    };
+    ou.validate()?;
+    let explore = explore_policy(cfg, arm, ou);
+    Ok(Problem {
+        spec,
+        squash,
+        ret,
+        prior_shift,
+        prediction_starts,
+        env_start,
+        explore,
+    })
+}
+
+/// The initial roll-out's actions: OU stiffness, plus for VILTA the scan's increments per
+/// controller tick, averaged over each step (the action is held for the step).
+fn explore_policy(cfg: &ArmExperiment, arm: &ArmConfig, ou: OuParams) -> ExplorePolicy {
+    let horizon = cfg.horizon;
+    let dt = cfg.dt;
+    match (&cfg.vilta, cfg.initial.scan.is_some()) {
+        (Some(v), true) => {
+            let ticks_per_step = dt / v.delta_tick;
+            let cfg = cfg.clone();
+            let arm = arm.clone();
+            // The scan starts where the arm starts (observed at t = 0).
+            let path: Mutex<Option<Path>> = Mutex::new(None);
+            Box::new(move |seed, t, obs| {
+                let k = ou.profiles(horizon, seed)[t.min(horizon - 1)];
+                let mut guard = path.lock().unwrap_or_else(|e| e.into_inner());
+                if t == 0 || guard.is_none() {
+                    *guard = Some(initial_path(&cfg, &arm, [obs[0], obs[1]]));
+                }
+                let p = guard.as_ref().expect("set above");
+                let (a, b) = (p(t as f64 * dt), p((t + 1) as f64 * dt));
+                vec![
+                    k[0],
+                    k[1],
+                    (b.x[0] - a.x[0]) / ticks_per_step,
+                    (b.x[1] - a.x[1]) / ticks_per_step,
+                ]
+            })
+        }
+        _ => Box::new(move |seed, t, _obs| ou.profiles(horizon, seed)[t.min(horizon - 1)].to_vec()),
+    }
+}
+
+/// RBF centres spread along the initial roll-out's path (ours), pseudo-targets `init_std ·
+/// randn`, the configured length-scales for every output.
+pub fn rbf_policy(cfg: &ArmExperiment, seed: u64) -> Result<RbfPolicy, ExperimentError> {
+    let arm = arm_config(cfg);
+    let n = cfg.policy.n_basis.unwrap_or(0);
+    let m = cfg.n_actions();
+    let path = initial_path(cfg, &arm, [cfg.start.state[0], cfg.start.state[1]]);
+    let t_end = cfg.horizon as f64 * cfg.dt;
+    let centres = Mat::from_fn(n, 4, |i, k| {
+        let r = path(t_end * (i as f64 + 0.5) / n as f64);
+        [r.x[0], r.x[1], r.xd[0], r.xd[1]][k]
+    });
+    let mut rng = rand::rngs::ChaCha8Rng::seed_from_u64(derive_seed(seed, 0, PURPOSE_POLICY_INIT));
+    let targets = Mat::from_fn(n, m, |_, _| {
+        cfg.policy.init_std * Distribution::<f64>::sample(&StandardNormal, &mut rng)
+    });
+    let ls = cfg.policy.lengthscales.unwrap_or([1.0; 4]);
+    let log_ls = Mat::from_fn(4, m, |k, _| ls[k].ln());
+    Ok(RbfPolicy::new(
+        centres,
+        targets,
+        log_ls.as_ref(),
+        cfg.policy
+            .snr
+            .unwrap_or(vicpilco_pilco::policy::DEFAULT_SNR),
+    )?)
+}
+
+/// Weights `init_std · randn`, offsets 0 (mid-range gains after the saturation).
+pub fn linear_policy(cfg: &ArmExperiment, seed: u64) -> Result<LinearPolicy, ExperimentError> {
+    let m = cfg.n_actions();
+    let mut rng = rand::rngs::ChaCha8Rng::seed_from_u64(derive_seed(seed, 0, PURPOSE_POLICY_INIT));
+    let w = Mat::from_fn(m, 4, |_, _| {
+        cfg.policy.init_std * Distribution::<f64>::sample(&StandardNormal, &mut rng)
+    });
+    Ok(LinearPolicy::new(w.as_ref(), &vec![0.0; m])?)
+}
+
+/// Whether the peg ended fully inserted (the simulator's `inserted` flag at the last step:
+/// in the hole within the insertion tolerance of the end wall).
+pub fn inserted(r: &Rollout) -> bool {
+    r.infos
+        .last()
+        .and_then(|i| i.flags.get("inserted"))
+        .copied()
+        .unwrap_or(false)
+}
+
+/// The learning problem with `policy` and its arm environment.
+pub fn setup<P>(
+    cfg: &ArmExperiment,
+    policy: P,
+    seed: u64,
+) -> Result<(LoopSetup<P>, ArmEnv), ExperimentError> {
+    let arm = arm_config(cfg);
+    let p = problem(cfg, &arm)?;
+    let env = ArmEnv::new(arm)?;
+    let setup = LoopSetup {
+        spec: p.spec,
+        squash: Some(p.squash),
+        ret: p.ret,
+        prediction_starts: p.prediction_starts,
+        env_start: p.env_start,
+        prior_shift: p.prior_shift,
+        dynamics: DynamicsOptions {
+            sparse_threshold: cfg.gp.sparse_threshold,
+            train: TrainOptions {
+                max_iters: cfg.gp.line_searches,
+                ..TrainOptions::default()
+            },
+            sparse: SparseTrainOptions {
+                num_inducing: cfg.gp.n_inducing,
+                seed,
+                ..SparseTrainOptions::default()
+            },
+        },
+        optimiser: OptimiserOptions {
+            length: cfg.optimiser.length,
+            mfepls: cfg.optimiser.mfepls,
+            memory: cfg.optimiser.memory,
+            wolfe: Wolfe::PILCO,
+        },
+        initial_rollouts: 1,
+        episodes: cfg.episodes,
+        rollouts_per_episode: cfg.vilta.as_ref().map_or(1, |v| v.rollouts_per_iteration),
+        policy,
+        explore: p.explore,
+        success: Box::new(inserted),
+        seed,
+    };
+    Ok((setup, env))
+}
+
+/// Whether the config's policy is linear (the caller picks the policy type).
+pub fn is_linear(cfg: &ArmExperiment) -> bool {
+    cfg.policy.kind == PolicyKind::Linear
+}

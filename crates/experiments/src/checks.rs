@@ -1,0 +1,405 @@
+//! After an arm run: the final policy's evaluations (fresh starts for `vilta-var`, constant
+//! gains for comparison) and the thesis's claims beside what the run measured (issue 6's
+//! acceptance numbers; `pass` is `null` while the run is too short to decide).
+
+use crate::config::{ArmExperiment, PolicyKind, Task};
+use crate::summary::{FinalEval, Summary, ThesisCheck};
+use crate::{arm, ExperimentError, RunOptions};
+use vicpilco_env::Environment;
+use vicpilco_learn::data::Rollout;
+use vicpilco_learn::outer::{derive_seed, rollout, LoopOutcome};
+use vicpilco_pilco::policy::Policy;
+
+/// Stiffness (N/m) of the constant-gain comparison: the middle of the VIL range.
+pub const CONSTANT_GAIN: f64 = 127.5;
+/// Seconds at the start and end of an episode over which the final gains are averaged.
+pub const GAIN_WINDOW_S: f64 = 2.0;
+/// Upper bound on the mean time per policy update of vil-gic-rbf10 (s) (issue 6).
+pub const EPISODE_TIME_BAR_S: f64 = 240.0;
+
+/// Evaluate the final policy where the config asks for it, and the constant-gain roll-out of
+/// VIL runs; add them and the thesis checks to the summary.
+pub fn after_run<P>(
+    cfg: &ArmExperiment,
+    mut summary: Summary,
+    outcome: &LoopOutcome<P>,
+    opts: &RunOptions,
+) -> Result<Summary, ExperimentError>
+where
+    P: Policy + Clone + Sync,
+    P::Cache: Send,
+{
+    let (setup, mut env) = arm::setup(cfg, outcome.policy.clone(), opts.seed)?;
+    if cfg.task == Task::Vil {
+        let start = setup
+            .env_start
+            .sample(derive_seed(opts.seed, 0, arm::PURPOSE_EVALUATION))?;
+        let r = rollout(
+            &mut env,
+            &start,
+            derive_seed(opts.seed, 1, arm::PURPOSE_EVALUATION),
+            |_, _| Ok(vec![CONSTANT_GAIN, CONSTANT_GAIN]),
+        )?;
+        summary.constant_gain_return = Some(setup.recorded_return(&r));
+    }
+    let n_eval = cfg.vilta.as_ref().map_or(0, |v| v.evaluation_starts);
+    if n_eval > 0 {
+        let path = opts.out.join("final_eval.jsonl");
+        let mut lines = String::new();
+        let mut successes = 0;
+        for i in 0..n_eval {
+            // Own seeds: none of the learning roll-outs' streams.
+            let base = derive_seed(opts.seed, 1000 + i as u64, arm::PURPOSE_EVALUATION);
+            let start = setup.env_start.sample(derive_seed(base, 0, 1))?;
+            let policy = &outcome.policy;
+            let r = rollout(&mut env, &start, derive_seed(base, 0, 2), |t, obs| {
+                Ok(setup.act(policy, None, t, obs))
+            })?;
+            let ok = arm::inserted(&r);
+            successes += usize::from(ok);
+            let line = serde_json::json!({ "start_y": start[1], "success": ok, "rollout": r });
+            lines.push_str(&line.to_string());
+            lines.push('\n');
+        }
+        std::fs::write(&path, lines).map_err(|e| ExperimentError::Io { path, source: e })?;
+        summary.final_eval = Some(FinalEval {
+            starts: n_eval,
+            successes,
+            fraction: successes as f64 / n_eval as f64,
+        });
+    }
+    let last = outcome.rollouts.iter().rev().find(|r| r.used_for_training);
+    summary.final_gains = last.map(|r| gains_first_last(r, env.dt()));
+    Ok(summary)
+}
+
+/// Mean (k_x, k_y) over the first and the last [`GAIN_WINDOW_S`] seconds of a roll-out.
+fn gains_first_last(r: &Rollout, dt: f64) -> [[f64; 2]; 2] {
+    let n = ((GAIN_WINDOW_S / dt).round() as usize).clamp(1, r.len().max(1));
+    let mean = |acts: &[Vec<f64>]| -> [f64; 2] {
+        let c = acts.len().max(1) as f64;
+        [
+            acts.iter().map(|a| a[0]).sum::<f64>() / c,
+            acts.iter().map(|a| a[1]).sum::<f64>() / c,
+        ]
+    };
+    let len = r.actions.len();
+    [
+        mean(&r.actions[..n.min(len)]),
+        mean(&r.actions[len.saturating_sub(n)..]),
+    ]
+}
+
+fn check(claim: &str, thesis: &str, measured: String, pass: Option<bool>) -> ThesisCheck {
+    ThesisCheck {
+        claim: claim.into(),
+        thesis: thesis.into(),
+        measured,
+        pass,
+    }
+}
+
+/// Mean recorded return over updates `from..=to` (1-based), if the run has them all.
+fn mean_return(s: &Summary, from: usize, to: usize) -> Option<f64> {
+    let eps: Vec<_> = s
+        .episodes
+        .iter()
+        .filter(|e| (from..=to).contains(&e.index))
+        .collect();
+    (eps.len() == to - from + 1)
+        .then(|| eps.iter().map(|e| e.recorded_return).sum::<f64>() / eps.len() as f64)
+}
+
+fn fmt_opt(v: Option<f64>) -> String {
+    v.map_or("n.a.".into(), |v| format!("{v:.1}"))
+}
+
+/// The first update from which `streak` consecutive updates all inserted (every roll-out).
+fn streak_start(s: &Summary, streak: usize) -> Option<usize> {
+    let mut run = 0;
+    for e in &s.episodes {
+        run = if e.success_fraction >= 1.0 {
+            run + 1
+        } else {
+            0
+        };
+        if run >= streak {
+            return Some(e.index + 1 - streak);
+        }
+    }
+    None
+}
+
+/// The claims of issue 6 that apply to this run. Claims about the end of a run are decided
+/// only once it has `planned` updates (the config's number, before `--episodes`/`--quick`).
+pub fn thesis_checks(
+    name: &str,
+    cfg: &ArmExperiment,
+    planned: usize,
+    s: &Summary,
+) -> Vec<ThesisCheck> {
+    let n = s.episodes.len();
+    let full = n >= planned;
+    let last = s.episodes.last();
+    let final_return = last.map(|e| e.recorded_return);
+    let mut out = Vec::new();
+    let vil_rbf = cfg.task == Task::Vil
+        && cfg.controller == vicpilco_env::arm::ControllerKind::Gic
+        && cfg.policy.kind == PolicyKind::Rbf;
+    if vil_rbf {
+        let window: Vec<_> = s
+            .episodes
+            .iter()
+            .filter(|e| (6..=10).contains(&e.index))
+            .collect();
+        let inserted = window.iter().filter(|e| e.success_fraction >= 1.0).count();
+        out.push(check(
+            "every roll-out of updates 6-10 inserts",
+            "strategy found before 10 episodes",
+            format!("{inserted}/{}", window.len()),
+            (window.len() == 5).then_some(inserted == 5),
+        ));
+        let m = mean_return(s, 6, 10);
+        out.push(check(
+            "mean recorded return over updates 6-10 <= 75",
+            "about 61",
+            fmt_opt(m),
+            m.map(|m| m <= 75.0),
+        ));
+        let m = mean_return(s, 21, 25);
+        out.push(check(
+            "mean recorded return over updates 21-25 <= 70",
+            "about 61",
+            fmt_opt(m),
+            m.map(|m| m <= 70.0),
+        ));
+        let e10 = s.episodes.iter().find(|e| e.index == 10);
+        out.push(check(
+            "predicted return at update 10 within 15 % of the recorded one",
+            "predictions match the system (Fig. 5-8)",
+            e10.map_or("n.a.".into(), |e| {
+                format!("{:.1} vs {:.1}", e.predicted_return_mean, e.recorded_return)
+            }),
+            e10.map(|e| {
+                (e.predicted_return_mean - e.recorded_return).abs() <= 0.15 * e.recorded_return
+            }),
+        ));
+    }
+    if cfg.task == Task::Vil && cfg.policy.kind == PolicyKind::Linear {
+        let first = streak_start(s, 5);
+        out.push(check(
+            "5 consecutive inserting updates by update 20",
+            "about 15 trials, 9 failures first; converges to about 61",
+            first.map_or("never".into(), |f| format!("updates {f}-{}", f + 4)),
+            if first.is_some_and(|f| f + 4 <= 20) {
+                Some(true)
+            } else {
+                (n >= 20).then_some(false)
+            },
+        ));
+    }
+    if cfg.task == Task::Vil && cfg.controller == vicpilco_env::arm::ControllerKind::Sic {
+        out.push(check(
+            "final return <= 90",
+            "78 (80 in the caption of Fig. 5-7)",
+            fmt_opt(final_return),
+            full.then(|| final_return.is_some_and(|r| r <= 90.0)),
+        ));
+        let tail: Vec<_> = s.episodes.iter().rev().take(5).collect();
+        let ok = tail.iter().filter(|e| e.success_fraction >= 1.0).count();
+        out.push(check(
+            "the last 5 updates insert",
+            "inserts with higher stiffness than GIC",
+            format!("{ok}/{}", tail.len()),
+            (full && tail.len() == 5).then_some(ok == 5),
+        ));
+        out.push(check(
+            "mean k_y over the last roll-out above the GIC run's (compare in EXPERIMENTS.md)",
+            "SIC needs stiffer gains",
+            s.final_gains.map_or("n.a.".into(), |g| {
+                format!("first 2 s {:.0}, last 2 s {:.0} N/m", g[0][1], g[1][1])
+            }),
+            None,
+        ));
+    }
+    if cfg.task == Task::Vil {
+        let bar = [s.initial_return, s.constant_gain_return];
+        out.push(check(
+            "final return below the initial OU roll-out's and constant gains' (127.5 N/m)",
+            "learning improves on the initial profiles",
+            format!(
+                "{} vs {} and {}",
+                fmt_opt(final_return),
+                fmt_opt(bar[0]),
+                fmt_opt(bar[1])
+            ),
+            match (final_return, bar) {
+                (Some(f), [Some(a), Some(b)]) if full => Some(f < a && f < b),
+                _ => None,
+            },
+        ));
+    }
+    if cfg.task == Task::Vilta && cfg.start.y_range.is_none() {
+        let first = s.episodes.iter().find(|e| e.success).map(|e| e.index);
+        out.push(check(
+            "first insertion within 12 policy updates",
+            "hole found at update 3",
+            first.map_or("never".into(), |f| format!("update {f}")),
+            first.map_or((n >= 12).then_some(false), |f| Some(f <= 12)),
+        ));
+        let after = first.and_then(|f| {
+            s.episodes
+                .iter()
+                .filter(|e| e.index > f)
+                .collect::<Vec<_>>()
+                .windows(3)
+                .find(|w| w.iter().all(|e| e.success))
+                .map(|w| w[0].index)
+        });
+        out.push(check(
+            "3 consecutive inserting updates after the first insertion",
+            "lost at 4, consistent from update 11",
+            after.map_or("not yet".into(), |a| format!("from update {a}")),
+            after.map(|_| true).or(full.then_some(false)),
+        ));
+        out.push(check(
+            "final return <= 25",
+            "20",
+            fmt_opt(final_return),
+            full.then(|| final_return.is_some_and(|r| r <= 25.0)),
+        ));
+        out.push(check(
+            "final gains lowered after insertion: mean (k_x, k_y) first vs last 2 s",
+            "about 60 and 10 N/m at the end",
+            s.final_gains.map_or("n.a.".into(), |g| {
+                format!(
+                    "({:.0}, {:.0}) -> ({:.0}, {:.0}) N/m",
+                    g[0][0], g[0][1], g[1][0], g[1][1]
+                )
+            }),
+            None,
+        ));
+    }
+    if let Some(e) = &s.final_eval {
+        out.push(check(
+            "the final policy inserts from >= 80 % of fresh starts y0 ~ U[0.1, 0.3]",
+            "hole found over the whole interval after 10 iterations",
+            format!("{}/{}", e.successes, e.starts),
+            full.then_some(e.fraction >= 0.8),
+        ));
+    }
+    if name == "vil-gic" || name == "vil-gic-rbf10" {
+        let mean_wall = (n > 0).then(|| s.wall_s / n as f64);
+        out.push(check(
+            "mean wall time per policy update <= 4 min",
+            "17 min per episode (MATLAB, Xeon E5 3.5 GHz)",
+            mean_wall.map_or("n.a.".into(), |w| format!("{w:.0} s")),
+            mean_wall.map(|w| w <= EPISODE_TIME_BAR_S),
+        ));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::summary::EpisodeSummary;
+    use vicpilco_learn::outer::EpisodeRecord;
+
+    fn summary(returns: &[(f64, bool)]) -> Summary {
+        let episodes = returns
+            .iter()
+            .enumerate()
+            .map(|(i, &(r, ok))| EpisodeSummary {
+                record: EpisodeRecord {
+                    index: i + 1,
+                    predicted_return_mean: r * 1.05,
+                    predicted_return_std: 1.0,
+                    recorded_return: r,
+                    success: ok,
+                    rollouts: 1,
+                    success_fraction: if ok { 1.0 } else { 0.0 },
+                    interaction_s: 10.0,
+                    train_s: 1.0,
+                    optimise_s: 10.0,
+                    evaluations: 60,
+                    line_searches: 50,
+                    termination: "test".into(),
+                    objective_start: r,
+                    objective_end: r,
+                    n_train: 100,
+                    sparse: false,
+                },
+                colour: crate::summary::colour(if ok { 1.0 } else { 0.0 }).into(),
+                final_x: None,
+                max_force: None,
+                start_y: None,
+            })
+            .collect();
+        Summary {
+            experiment: "vil-gic-rbf10".into(),
+            seed: 1,
+            controller: Some("gic".into()),
+            policy: "rbf".into(),
+            n_params: 68,
+            initial_return: Some(120.0),
+            episodes,
+            solved_at_episode: None,
+            interaction_s: 0.0,
+            wall_s: 100.0 * returns.len() as f64,
+            config: serde_json::Value::Null,
+            thesis_reference: Vec::new(),
+            constant_gain_return: Some(110.0),
+            final_eval: None,
+            final_gains: None,
+        }
+    }
+
+    fn cfg(name: &str) -> ArmExperiment {
+        let (file, text) = crate::config::shipped(name).unwrap();
+        crate::config::parse(text, file).unwrap()
+    }
+
+    fn verdict(checks: &[ThesisCheck], claim: &str) -> Option<bool> {
+        checks
+            .iter()
+            .find(|c| c.claim.contains(claim))
+            .unwrap_or_else(|| panic!("no claim `{claim}` in {checks:?}"))
+            .pass
+    }
+
+    #[test]
+    fn vil_claims_pass_fail_or_wait_for_enough_updates() {
+        let c = cfg("vil-gic-rbf10");
+        let good: Vec<_> = (0..25)
+            .map(|i| (if i < 3 { 90.0 } else { 62.0 }, i >= 3))
+            .collect();
+        let checks = thesis_checks("vil-gic-rbf10", &c, 25, &summary(&good));
+        assert_eq!(verdict(&checks, "updates 6-10 inserts"), Some(true));
+        assert_eq!(verdict(&checks, "updates 6-10 <= 75"), Some(true));
+        assert_eq!(verdict(&checks, "updates 21-25 <= 70"), Some(true));
+        assert_eq!(verdict(&checks, "within 15 %"), Some(true));
+        assert_eq!(verdict(&checks, "initial OU"), Some(true));
+        assert_eq!(verdict(&checks, "wall time"), Some(true));
+
+        let mut bad = good.clone();
+        bad[7] = (80.0, false);
+        let checks = thesis_checks("vil-gic-rbf10", &c, 25, &summary(&bad));
+        assert_eq!(verdict(&checks, "updates 6-10 inserts"), Some(false));
+
+        let short = thesis_checks("vil-gic-rbf10", &c, 25, &summary(&good[..4]));
+        assert_eq!(verdict(&short, "updates 6-10 inserts"), None);
+        assert_eq!(verdict(&short, "initial OU"), None);
+    }
+
+    #[test]
+    fn linear_policy_needs_five_inserting_updates_in_a_row_by_update_20() {
+        let c = cfg("vil-gic-lin");
+        let late: Vec<_> = (1..=25).map(|i| (70.0, i >= 17)).collect();
+        let checks = thesis_checks("vil-gic-lin", &c, 25, &summary(&late));
+        assert_eq!(verdict(&checks, "5 consecutive"), Some(false));
+        let early: Vec<_> = (1..=25).map(|i| (70.0, i >= 12)).collect();
+        let checks = thesis_checks("vil-gic-lin", &c, 25, &summary(&early));
+        assert_eq!(verdict(&checks, "5 consecutive"), Some(true));
+    }
+}

@@ -1,0 +1,442 @@
+//! The thesis experiments' settings: one TOML file per run in `experiments/` (embedded in the
+//! binary, so `vicpilco run vil-gic` works from any directory; `--config FILE` reads another).
+//!
+//! Every struct denies unknown keys, and [`ArmExperiment::validate`] checks ranges after
+//! parsing; both kinds of error name the file and the key. Values the thesis does not give are
+//! marked "ours" in the TOML files and in the report.
+
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use vicpilco_env::arm::ControllerKind;
+
+/// The shipped configs: (name, file text). `vil-gic` is an alias of `vil-gic-rbf10`.
+pub const CONFIGS: &[(&str, &str)] = &[
+    (
+        "vil-gic-lin",
+        include_str!("../../../experiments/vil-gic-lin.toml"),
+    ),
+    (
+        "vil-gic-rbf10",
+        include_str!("../../../experiments/vil-gic-rbf10.toml"),
+    ),
+    (
+        "vil-gic-rbf25",
+        include_str!("../../../experiments/vil-gic-rbf25.toml"),
+    ),
+    ("vil-sic", include_str!("../../../experiments/vil-sic.toml")),
+    ("vilta", include_str!("../../../experiments/vilta.toml")),
+    (
+        "vilta-var",
+        include_str!("../../../experiments/vilta-var.toml"),
+    ),
+];
+
+/// Names that stand for another config.
+pub const ALIASES: &[(&str, &str)] = &[("vil-gic", "vil-gic-rbf10")];
+
+/// A bad config: which file, which key, what is wrong.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    #[error("{file}: {message}")]
+    Parse { file: String, message: String },
+    #[error("{file}: `{key}` {message}")]
+    Invalid {
+        file: String,
+        key: String,
+        message: String,
+    },
+    #[error("{path}: {source}")]
+    Read {
+        path: String,
+        source: std::io::Error,
+    },
+}
+
+/// VIL: stiffness along the given plan; VILTA: stiffness and reference velocities.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Task {
+    Vil,
+    Vilta,
+}
+
+/// Policy family.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PolicyKind {
+    Linear,
+    Rbf,
+}
+
+/// One thesis run (§5-4 to §5-6).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArmExperiment {
+    pub task: Task,
+    /// Impedance law: `gic` or `sic`.
+    pub controller: ControllerKind,
+    /// Policy updates after the initial roll-out (VIL: Table 5-4, N = 25).
+    pub episodes: usize,
+    /// Learning steps H and their length Δt (s) (Table 5-1: 100 × 0.1 s).
+    pub horizon: usize,
+    pub dt: f64,
+    pub policy: PolicyConfig,
+    pub cost: CostConfig,
+    pub optimiser: OptimiserConfig,
+    pub gp: GpConfig,
+    pub start: StartConfig,
+    /// Initial (exploration) roll-out.
+    pub initial: InitialConfig,
+    /// VILTA only.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vilta: Option<ViltaConfig>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PolicyConfig {
+    pub kind: PolicyKind,
+    /// RBF basis functions N_c (RBF only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub n_basis: Option<usize>,
+    /// Stiffness range of the partial non-negative saturation (N/m).
+    pub k_min: f64,
+    pub k_max: f64,
+    /// VILTA: |Δx_ref|, |Δy_ref| limit per `delta_tick` (m) (Table 5-6: 0.0025).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub delta_max: Option<f64>,
+    /// Initial RBF length-scales on (x, y, ẋ, ẏ) (ours).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lengthscales: Option<[f64; 4]>,
+    /// Std of the initial pseudo-targets (RBF) or weights (linear) (ours, PILCO: 0.1).
+    pub init_std: f64,
+    /// RBF signal-to-noise ratio σ_f/σ_n (SNR 100: noise 0.01²).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub snr: Option<f64>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CostConfig {
+    /// Which of (x, y) the position cost measures, and its target there.
+    pub position_dims: Vec<String>,
+    pub position_target: Vec<f64>,
+    /// Width of the position cost (m) and of the force cost on (f_x, f_y) (N).
+    pub position_width: f64,
+    pub force_width: f64,
+    /// w2: weight of std of the summed saturating costs (negative: exploration).
+    pub w_std: f64,
+    /// w3: weight of the energy cost of (k_x, k_y), S = diag(k_max²).
+    pub w_energy: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OptimiserConfig {
+    /// Line searches per policy update (PILCO "Length").
+    pub length: u64,
+    /// Function evaluations per line search (MFEPLS).
+    pub mfepls: u64,
+    /// L-BFGS memory (ours).
+    pub memory: usize,
+}
+
+/// Where the relative targets' prior mean comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PriorMean {
+    /// The reference trajectory's increment over each step (§4-1-2).
+    Reference,
+    /// Zero.
+    Zero,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GpConfig {
+    /// Time as a GP input (VIL: yes; VILTA: no).
+    pub time_input: bool,
+    pub prior_mean: PriorMean,
+    /// Full GP up to this many points, FITC above.
+    pub sparse_threshold: usize,
+    pub n_inducing: usize,
+    /// Line searches per hyper-parameter fit.
+    pub line_searches: u64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StartConfig {
+    /// Start state (x, y, ẋ, ẏ, f_x, f_y).
+    pub state: [f64; 6],
+    /// Std of the prediction's start distribution (ours).
+    pub prediction_std: [f64; 6],
+    /// Real starts draw y uniformly from this interval (vilta-var).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub y_range: Option<[f64; 2]>,
+    /// Prediction start means' y, one start distribution each (K), averaged (vilta-var).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prediction_y: Option<Vec<f64>>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialConfig {
+    /// Ornstein–Uhlenbeck stiffness profile: mean-reversion rate θ (1/s) (see
+    /// [`vicpilco_env::arm::OuParams`]).
+    pub ou_theta: f64,
+    /// VILTA: the scan's via points (t, x, y), min-jerk between them, sent as per-tick Δ.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scan: Option<Vec<[f64; 3]>>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ViltaConfig {
+    /// The VIL scene moved by this much in x (m) (issue: +0.05).
+    pub geometry_shift_x: f64,
+    /// Controller tick the Δ actions refer to (s) (thesis: 5 ms).
+    pub delta_tick: f64,
+    /// Roll-outs per iteration; only the first adds GP data.
+    pub rollouts_per_iteration: usize,
+    /// Fresh starts the final policy is evaluated on (0: none).
+    pub evaluation_starts: usize,
+}
+
+/// The config text and file label of a shipped name (aliases resolved).
+pub fn shipped(name: &str) -> Option<(&'static str, &'static str)> {
+    let name = ALIASES
+        .iter()
+        .find(|(a, _)| *a == name)
+        .map_or(name, |(_, t)| t);
+    CONFIGS.iter().find(|(n, _)| *n == name).copied()
+}
+
+/// Parse and validate a config text; `file` labels errors.
+pub fn parse(text: &str, file: &str) -> Result<ArmExperiment, ConfigError> {
+    let cfg: ArmExperiment = toml::from_str(text).map_err(|e| ConfigError::Parse {
+        file: file.to_string(),
+        message: e.to_string(),
+    })?;
+    cfg.validate(file)?;
+    Ok(cfg)
+}
+
+/// Read, parse and validate a config file.
+pub fn load(path: &Path) -> Result<ArmExperiment, ConfigError> {
+    let text = std::fs::read_to_string(path).map_err(|e| ConfigError::Read {
+        path: path.display().to_string(),
+        source: e,
+    })?;
+    parse(&text, &path.display().to_string())
+}
+
+struct Check<'a> {
+    file: &'a str,
+}
+
+impl Check<'_> {
+    fn fail(&self, key: &str, message: String) -> ConfigError {
+        ConfigError::Invalid {
+            file: self.file.to_string(),
+            key: key.to_string(),
+            message,
+        }
+    }
+    fn positive(&self, key: &str, v: f64) -> Result<(), ConfigError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(self.fail(key, format!("must be a finite number > 0, got {v}")))
+        }
+    }
+    fn finite(&self, key: &str, v: f64) -> Result<(), ConfigError> {
+        if v.is_finite() {
+            Ok(())
+        } else {
+            Err(self.fail(key, format!("must be finite, got {v}")))
+        }
+    }
+    fn at_least(&self, key: &str, v: usize, min: usize) -> Result<(), ConfigError> {
+        if v >= min {
+            Ok(())
+        } else {
+            Err(self.fail(key, format!("must be ≥ {min}, got {v}")))
+        }
+    }
+    fn require<T>(&self, key: &str, v: &Option<T>, why: &str) -> Result<(), ConfigError> {
+        match v {
+            Some(_) => Ok(()),
+            None => Err(self.fail(key, format!("is required {why}"))),
+        }
+    }
+    fn forbid<T>(&self, key: &str, v: &Option<T>, why: &str) -> Result<(), ConfigError> {
+        match v {
+            Some(_) => Err(self.fail(key, format!("does not apply {why}"))),
+            None => Ok(()),
+        }
+    }
+}
+
+impl ArmExperiment {
+    /// Ranges and cross-field rules; the error names the first bad key.
+    pub fn validate(&self, file: &str) -> Result<(), ConfigError> {
+        let c = Check { file };
+        if !matches!(self.controller, ControllerKind::Gic | ControllerKind::Sic) {
+            return Err(c.fail("controller", "must be \"gic\" or \"sic\"".into()));
+        }
+        c.at_least("episodes", self.episodes, 1)?;
+        c.at_least("horizon", self.horizon, 1)?;
+        c.positive("dt", self.dt)?;
+        let p = &self.policy;
+        c.positive("policy.k_min", p.k_min)?;
+        c.positive("policy.k_max", p.k_max)?;
+        if p.k_min >= p.k_max {
+            return Err(c.fail(
+                "policy.k_min",
+                format!("must be below policy.k_max = {}, got {}", p.k_max, p.k_min),
+            ));
+        }
+        c.positive("policy.init_std", p.init_std)?;
+        match p.kind {
+            PolicyKind::Rbf => {
+                c.require("policy.n_basis", &p.n_basis, "for an RBF policy")?;
+                c.at_least("policy.n_basis", p.n_basis.unwrap_or(0), 1)?;
+                c.require("policy.lengthscales", &p.lengthscales, "for an RBF policy")?;
+                for (i, &l) in p.lengthscales.iter().flatten().enumerate() {
+                    c.positive(&format!("policy.lengthscales[{i}]"), l)?;
+                }
+                c.require("policy.snr", &p.snr, "for an RBF policy")?;
+                c.positive("policy.snr", p.snr.unwrap_or(0.0))?;
+            }
+            PolicyKind::Linear => {
+                c.forbid("policy.n_basis", &p.n_basis, "to a linear policy")?;
+                c.forbid("policy.lengthscales", &p.lengthscales, "to a linear policy")?;
+                c.forbid("policy.snr", &p.snr, "to a linear policy")?;
+            }
+        }
+        let cost = &self.cost;
+        if cost.position_dims.is_empty() || cost.position_dims.len() > 2 {
+            return Err(c.fail(
+                "cost.position_dims",
+                format!(
+                    "must name 1 or 2 of \"x\", \"y\", got {:?}",
+                    cost.position_dims
+                ),
+            ));
+        }
+        for (i, d) in cost.position_dims.iter().enumerate() {
+            if d != "x" && d != "y" || cost.position_dims[..i].contains(d) {
+                return Err(c.fail(
+                    "cost.position_dims",
+                    format!("entries must be distinct \"x\" or \"y\", got {d:?}"),
+                ));
+            }
+        }
+        if cost.position_target.len() != cost.position_dims.len() {
+            return Err(c.fail(
+                "cost.position_target",
+                format!(
+                    "needs one value per entry of cost.position_dims ({}), got {}",
+                    cost.position_dims.len(),
+                    cost.position_target.len()
+                ),
+            ));
+        }
+        for (i, &v) in cost.position_target.iter().enumerate() {
+            c.finite(&format!("cost.position_target[{i}]"), v)?;
+        }
+        c.positive("cost.position_width", cost.position_width)?;
+        c.positive("cost.force_width", cost.force_width)?;
+        c.finite("cost.w_std", cost.w_std)?;
+        if !(cost.w_energy.is_finite() && cost.w_energy >= 0.0) {
+            return Err(c.fail(
+                "cost.w_energy",
+                format!("must be finite and ≥ 0, got {}", cost.w_energy),
+            ));
+        }
+        let o = &self.optimiser;
+        c.at_least("optimiser.length", o.length as usize, 1)?;
+        c.at_least("optimiser.mfepls", o.mfepls as usize, 1)?;
+        c.at_least("optimiser.memory", o.memory, 1)?;
+        let g = &self.gp;
+        c.at_least("gp.sparse_threshold", g.sparse_threshold, 1)?;
+        c.at_least("gp.n_inducing", g.n_inducing, 1)?;
+        c.at_least("gp.line_searches", g.line_searches as usize, 1)?;
+        let s = &self.start;
+        for i in 0..6 {
+            c.finite(&format!("start.state[{i}]"), s.state[i])?;
+            c.positive(&format!("start.prediction_std[{i}]"), s.prediction_std[i])?;
+        }
+        if let Some([lo, hi]) = s.y_range {
+            if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+                return Err(c.fail(
+                    "start.y_range",
+                    format!("must be finite with lower ≤ upper, got [{lo}, {hi}]"),
+                ));
+            }
+        }
+        if let Some(ys) = &s.prediction_y {
+            if ys.is_empty() {
+                return Err(c.fail("start.prediction_y", "must not be empty".into()));
+            }
+            for (i, &y) in ys.iter().enumerate() {
+                c.finite(&format!("start.prediction_y[{i}]"), y)?;
+            }
+        }
+        c.positive("initial.ou_theta", self.initial.ou_theta)?;
+        match self.task {
+            Task::Vil => {
+                c.forbid("vilta", &self.vilta, "to a VIL run")?;
+                c.forbid("policy.delta_max", &p.delta_max, "to a VIL run")?;
+                c.forbid("initial.scan", &self.initial.scan, "to a VIL run")?;
+            }
+            Task::Vilta => {
+                c.require("vilta", &self.vilta, "for a VILTA run")?;
+                if self.gp.prior_mean == PriorMean::Reference {
+                    return Err(c.fail(
+                        "gp.prior_mean",
+                        "must be \"zero\" for a VILTA run (it has no given reference)".into(),
+                    ));
+                }
+                c.require("policy.delta_max", &p.delta_max, "for a VILTA run")?;
+                c.positive("policy.delta_max", p.delta_max.unwrap_or(0.0))?;
+                c.require("initial.scan", &self.initial.scan, "for a VILTA run")?;
+                let scan = self.initial.scan.as_deref().unwrap_or(&[]);
+                c.at_least("initial.scan", scan.len(), 2)?;
+                for (i, w) in scan.windows(2).enumerate() {
+                    if w[1][0].partial_cmp(&w[0][0]) != Some(std::cmp::Ordering::Greater) {
+                        return Err(c.fail(
+                            "initial.scan",
+                            format!("times must increase: entry {} at t = {}", i + 1, w[1][0]),
+                        ));
+                    }
+                }
+                if let Some(v) = &self.vilta {
+                    c.finite("vilta.geometry_shift_x", v.geometry_shift_x)?;
+                    c.positive("vilta.delta_tick", v.delta_tick)?;
+                    c.at_least("vilta.rollouts_per_iteration", v.rollouts_per_iteration, 1)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Learnable policy parameters n_ψ = N_c (n_π + m) + n_π m (RBF, §4-3) or m (n_π + 1)
+    /// (linear), with n_π = 4 inputs and m outputs.
+    pub fn n_params(&self) -> usize {
+        let (n_in, m) = (4, self.n_actions());
+        match self.policy.kind {
+            PolicyKind::Rbf => self.policy.n_basis.unwrap_or(0) * (n_in + m) + n_in * m,
+            PolicyKind::Linear => m * (n_in + 1),
+        }
+    }
+
+    /// Actions: (k_x, k_y) or (k_x, k_y, Δx_ref, Δy_ref).
+    pub fn n_actions(&self) -> usize {
+        match self.task {
+            Task::Vil => 2,
+            Task::Vilta => 4,
+        }
+    }
+}

@@ -1,0 +1,331 @@
+//! Keeping the run directory current while the loop runs, and continuing a stopped run.
+//!
+//! * every roll-out is appended to `rollouts.jsonl` when it is recorded, with its weighted
+//!   cost per step;
+//! * every update's long-term prediction is appended to `predictions.jsonl`;
+//! * `summary.json` is rewritten after every update;
+//! * `checkpoint.json` after the initial roll-outs and after every update: the loop state
+//!   ([`LoopState`]: data, hyper-parameters, inducing inputs, policy, records), the summary so
+//!   far and the config it belongs to. Every random stream is derived from the master seed and
+//!   the episode, so no generator state is needed to continue bit for bit.
+
+use crate::summary::{colour, solved_at, write_json_atomic, EpisodeSummary, Summary};
+use crate::ExperimentError;
+use serde::{Deserialize, Serialize};
+use std::io::{BufRead, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use vicpilco_learn::data::Rollout;
+use vicpilco_learn::outer::{EpisodeRecord, LoopObserver, LoopState, Phase};
+use vicpilco_learn::value::ValueOut;
+
+/// Version of `checkpoint.json`'s layout; a different one is refused.
+pub const CHECKPOINT_FORMAT: u32 = 1;
+
+/// What `checkpoint.json` holds.
+#[derive(Serialize, Deserialize)]
+pub struct Checkpoint {
+    pub format: u32,
+    pub experiment: String,
+    pub seed: u64,
+    /// The settings that must match to continue (everything but the number of updates).
+    pub identity: serde_json::Value,
+    pub summary: Summary,
+    pub state: LoopState,
+}
+
+/// Task-specific numbers of a roll-out for `summary.json`: (final x, largest |f|, start y).
+pub type RolloutExtras = fn(&Rollout) -> (f64, f64, f64);
+
+/// How predictions are labelled and weighted in `predictions.jsonl`.
+pub struct PredictionLabels {
+    pub dt: f64,
+    pub state_names: Vec<String>,
+    pub action_names: Vec<String>,
+    /// w1 and w3 of the return: the weighted cost per step is `w1 E[c] + w3 E[c_a]`.
+    pub w_mean: f64,
+    pub w_energy: f64,
+}
+
+/// The observer that writes the run directory; forwards to the caller's observer.
+pub struct Recorder<'a> {
+    pub inner: &'a mut dyn LoopObserver,
+    pub summary: Summary,
+    pub dir: PathBuf,
+    pub dt: f64,
+    pub labels: PredictionLabels,
+    pub extras: Option<RolloutExtras>,
+    pub identity: serde_json::Value,
+    /// Wall time of earlier sessions of this run (resumed runs).
+    pub wall_before: f64,
+    pub started: Instant,
+    pub rollouts: std::fs::File,
+    pub predictions: std::fs::File,
+    /// The first roll-out of the update in progress, and the last one of the run.
+    pub current: Option<Rollout>,
+    pub error: Option<ExperimentError>,
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ExperimentError + '_ {
+    move |e| ExperimentError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    }
+}
+
+/// Open a JSON-lines file for appending, first dropping lines of episodes after `keep_upto`
+/// (a resumed run repeats them) or, with `None`, everything.
+pub fn open_jsonl(path: &Path, keep_upto: Option<usize>) -> Result<std::fs::File, ExperimentError> {
+    let kept: Vec<String> = match keep_upto {
+        Some(last) if path.exists() => {
+            let f = std::fs::File::open(path).map_err(io_err(path))?;
+            let mut kept = Vec::new();
+            for (i, line) in std::io::BufReader::new(f).lines().enumerate() {
+                let line = line.map_err(io_err(path))?;
+                let v: serde_json::Value =
+                    serde_json::from_str(&line).map_err(|e| ExperimentError::Resume {
+                        path: path.to_path_buf(),
+                        message: format!("line {}: {e}", i + 1),
+                    })?;
+                let episode = v["episode"]
+                    .as_u64()
+                    .ok_or_else(|| ExperimentError::Resume {
+                        path: path.to_path_buf(),
+                        message: format!("line {} has no \"episode\"", i + 1),
+                    })?;
+                if episode as usize <= last {
+                    kept.push(line);
+                }
+            }
+            kept
+        }
+        _ => Vec::new(),
+    };
+    let mut text = kept.join("\n");
+    if !text.is_empty() {
+        text.push('\n');
+    }
+    std::fs::write(path, text).map_err(io_err(path))?;
+    std::fs::OpenOptions::new()
+        .append(true)
+        .open(path)
+        .map_err(io_err(path))
+}
+
+/// Read `DIR/checkpoint.json` and check it belongs to this run.
+pub fn read_checkpoint(
+    dir: &Path,
+    experiment: &str,
+    seed: u64,
+    identity: &serde_json::Value,
+) -> Result<Checkpoint, ExperimentError> {
+    let path = dir.join("checkpoint.json");
+    let bad = |message: String| ExperimentError::Resume {
+        path: path.clone(),
+        message,
+    };
+    let text =
+        std::fs::read_to_string(&path).map_err(|e| bad(format!("nothing to resume ({e})")))?;
+    let format: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+    if format["format"].as_u64() != Some(CHECKPOINT_FORMAT as u64) {
+        return Err(bad(format!(
+            "format {} cannot be read (expected {CHECKPOINT_FORMAT})",
+            format["format"]
+        )));
+    }
+    let cp: Checkpoint = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+    if cp.experiment != experiment {
+        return Err(bad(format!(
+            "written by experiment `{}`, not `{experiment}`",
+            cp.experiment
+        )));
+    }
+    if cp.seed != seed {
+        return Err(bad(format!("written with seed {}, not {seed}", cp.seed)));
+    }
+    if let Some(key) = first_difference(&cp.identity, identity, String::new()) {
+        return Err(bad(format!(
+            "written with different settings: `{key}` differs (only the number of updates may \
+             change on resume)"
+        )));
+    }
+    Ok(cp)
+}
+
+/// The first path at which two JSON values differ.
+fn first_difference(a: &serde_json::Value, b: &serde_json::Value, at: String) -> Option<String> {
+    use serde_json::Value::{Array, Object};
+    match (a, b) {
+        (Object(x), Object(y)) => {
+            let mut keys: Vec<&String> = x.keys().chain(y.keys()).collect();
+            keys.sort();
+            keys.dedup();
+            keys.into_iter().find_map(|k| {
+                let path = if at.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{at}.{k}")
+                };
+                match (x.get(k), y.get(k)) {
+                    (Some(u), Some(v)) => first_difference(u, v, path),
+                    _ => Some(path),
+                }
+            })
+        }
+        (Array(x), Array(y)) if x.len() == y.len() => x
+            .iter()
+            .zip(y)
+            .enumerate()
+            .find_map(|(i, (u, v))| first_difference(u, v, format!("{at}[{i}]"))),
+        _ if a == b => None,
+        _ => Some(if at.is_empty() { "(root)".into() } else { at }),
+    }
+}
+
+impl Recorder<'_> {
+    fn keep(&mut self, result: Result<(), ExperimentError>) {
+        if let Err(e) = result {
+            tracing::error!("{e}");
+            self.error.get_or_insert(e);
+        }
+    }
+
+    fn append(
+        file: &mut std::fs::File,
+        path: PathBuf,
+        line: &serde_json::Value,
+    ) -> Result<(), ExperimentError> {
+        writeln!(file, "{line}")
+            .and_then(|()| file.flush())
+            .map_err(|e| ExperimentError::Io { path, source: e })
+    }
+
+    /// `wall_s` of the run so far, earlier sessions included.
+    pub fn wall_s(&self) -> f64 {
+        self.wall_before + self.started.elapsed().as_secs_f64()
+    }
+
+    fn prediction_line(
+        &self,
+        episode: usize,
+        out: &ValueOut,
+    ) -> Result<serde_json::Value, ExperimentError> {
+        let l = &self.labels;
+        let mut starts = Vec::with_capacity(out.trajectories.len());
+        for traj in &out.trajectories {
+            let mut steps = Vec::with_capacity(traj.len());
+            for (t, s) in traj.iter().enumerate() {
+                let diag =
+                    |m: &faer::Mat<f64>| (0..m.nrows()).map(|i| m[(i, i)]).collect::<Vec<_>>();
+                let var = diag(&s.cov);
+                let action_var = diag(&s.action_cov);
+                let weighted_mean = l.w_mean * s.cost_mean + l.w_energy * s.energy_mean;
+                let weighted_std = l.w_mean * s.cost_var.max(0.0).sqrt();
+                let all = s
+                    .mean
+                    .iter()
+                    .chain(&var)
+                    .chain(&s.action_mean)
+                    .chain(&action_var);
+                if let Some(v) = all
+                    .chain([&weighted_mean, &weighted_std])
+                    .find(|v| !v.is_finite())
+                {
+                    return Err(ExperimentError::Write(
+                        crate::summary::WriteError::NonFinite {
+                            what: format!("update {episode} prediction at step {t}"),
+                            value: *v,
+                        },
+                    ));
+                }
+                steps.push(serde_json::json!({
+                    "t": (t + 1) as f64 * l.dt,
+                    "mean": s.mean,
+                    "var": var,
+                    "action_mean": s.action_mean,
+                    "action_var": action_var,
+                    "cost_mean": s.cost_mean,
+                    "cost_var": s.cost_var,
+                    "energy_mean": s.energy_mean,
+                    "weighted_cost_mean": weighted_mean,
+                    "weighted_cost_std": weighted_std,
+                }));
+            }
+            starts.push(serde_json::Value::Array(steps));
+        }
+        Ok(serde_json::json!({
+            "episode": episode,
+            "dt": l.dt,
+            "state_names": l.state_names,
+            "action_names": l.action_names,
+            "starts": starts,
+        }))
+    }
+}
+
+impl LoopObserver for Recorder<'_> {
+    fn phase(&mut self, episode: usize, phase: Phase) {
+        self.inner.phase(episode, phase)
+    }
+    fn objective(&mut self, episode: usize, j: f64) {
+        self.inner.objective(episode, j)
+    }
+    fn rollout_done(&mut self, episode: usize, rollout: &Rollout, costs: &[f64]) {
+        self.summary.interaction_s += rollout.len() as f64 * self.dt;
+        if episode == 0 && self.summary.initial_return.is_none() {
+            self.summary.initial_return = Some(costs.iter().sum());
+        }
+        if rollout.used_for_training {
+            self.current = Some(rollout.clone());
+        }
+        let line = serde_json::json!({ "episode": episode, "costs": costs, "rollout": rollout });
+        let path = self.dir.join("rollouts.jsonl");
+        let result = Self::append(&mut self.rollouts, path, &line);
+        self.keep(result);
+        self.inner.rollout_done(episode, rollout, costs)
+    }
+    fn predicted(&mut self, episode: usize, prediction: &ValueOut) {
+        let path = self.dir.join("predictions.jsonl");
+        let result = self
+            .prediction_line(episode, prediction)
+            .and_then(|line| Self::append(&mut self.predictions, path, &line));
+        self.keep(result);
+        self.inner.predicted(episode, prediction)
+    }
+    fn episode_done(&mut self, record: &EpisodeRecord) {
+        let extras = match (self.extras, &self.current) {
+            (Some(f), Some(r)) => Some(f(r)),
+            _ => None,
+        };
+        self.summary.episodes.push(EpisodeSummary {
+            record: record.clone(),
+            colour: colour(record.success_fraction).to_string(),
+            final_x: extras.map(|e| e.0),
+            max_force: extras.map(|e| e.1),
+            start_y: extras.map(|e| e.2),
+        });
+        self.summary.solved_at_episode = solved_at(&self.summary.episodes);
+        self.summary.wall_s = self.wall_s();
+        let result = self.summary.write(&self.dir).map_err(ExperimentError::from);
+        self.keep(result);
+        self.inner.episode_done(record)
+    }
+    fn checkpoint(&mut self, state: &LoopState) {
+        self.summary.wall_s = self.wall_s();
+        let cp = Checkpoint {
+            format: CHECKPOINT_FORMAT,
+            experiment: self.summary.experiment.clone(),
+            seed: self.summary.seed,
+            identity: self.identity.clone(),
+            summary: self.summary.clone(),
+            state: state.clone(),
+        };
+        let result = serde_json::to_value(&cp)
+            .map_err(|e| ExperimentError::Write(e.into()))
+            .and_then(|v| {
+                write_json_atomic(&self.dir.join("checkpoint.json"), &v).map_err(Into::into)
+            });
+        self.keep(result);
+        self.inner.checkpoint(state)
+    }
+}
