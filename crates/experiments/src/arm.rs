@@ -297,14 +297,20 @@ pub fn linear_policy(cfg: &ArmExperiment, seed: u64) -> Result<LinearPolicy, Exp
     Ok(LinearPolicy::new(w.as_ref(), &vec![0.0; m])?)
 }
 
-/// Whether the peg ended fully inserted (the simulator's `inserted` flag at the last step:
-/// in the hole within the insertion tolerance of the end wall).
+/// Whether the peg ended fully inserted at the end of the episode (the simulator's
+/// `inserted` flag after the last step: in the hole within the insertion tolerance of the end
+/// wall). An episode the simulator stopped early (singular Jacobian) never succeeds.
 pub fn inserted(r: &Rollout) -> bool {
-    r.infos
-        .last()
-        .and_then(|i| i.flags.get("inserted"))
-        .copied()
-        .unwrap_or(false)
+    let stopped_early = r
+        .infos
+        .iter()
+        .any(|i| i.flags.get("singular") == Some(&true));
+    !stopped_early
+        && r.infos
+            .last()
+            .and_then(|i| i.flags.get("inserted"))
+            .copied()
+            .unwrap_or(false)
 }
 
 /// The learning problem with `policy` and its arm environment.
@@ -355,4 +361,71 @@ pub fn setup<P>(
 /// Whether the config's policy is linear (the caller picks the policy type).
 pub fn is_linear(cfg: &ArmExperiment) -> bool {
     cfg.policy.kind == PolicyKind::Linear
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeMap;
+    use vicpilco_env::StepInfo;
+
+    fn cfg(name: &str) -> ArmExperiment {
+        let (file, text) = crate::config::shipped(name).unwrap();
+        crate::config::parse(text, file).unwrap()
+    }
+
+    #[test]
+    fn vilta_search_rollout_scans_from_the_start_to_the_last_via_point() {
+        let c = cfg("vilta");
+        let arm = arm_config(&c);
+        let explore = explore_policy(&c, &arm, OuParams::default());
+        let ticks = c.dt / c.vilta.as_ref().unwrap().delta_tick;
+        let start = [0.5, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let (mut x, mut y) = (start[0], start[1]);
+        for t in 0..c.horizon {
+            let a = explore(7, t, &start);
+            assert_eq!(a.len(), 4);
+            assert!((c.policy.k_min..=c.policy.k_max).contains(&a[0]));
+            for d in &a[2..] {
+                assert!(d.abs() <= c.policy.delta_max.unwrap(), "step {t}: {d}");
+            }
+            x += a[2] * ticks;
+            y += a[3] * ticks;
+        }
+        assert!(
+            (x - 0.75).abs() < 1e-12 && (y - 0.30).abs() < 1e-12,
+            "({x}, {y})"
+        );
+    }
+
+    #[test]
+    fn success_needs_the_inserted_flag_at_the_end_of_a_full_episode() {
+        let info = |inserted: bool, singular: bool| StepInfo {
+            flags: BTreeMap::from([
+                ("inserted".to_string(), inserted),
+                ("singular".to_string(), singular),
+            ]),
+            ..StepInfo::default()
+        };
+        let rollout = |infos: Vec<StepInfo>| Rollout {
+            observations: vec![],
+            actions: vec![],
+            true_states: vec![],
+            infos,
+            used_for_training: true,
+        };
+        assert!(inserted(&rollout(vec![
+            info(false, false),
+            info(true, false)
+        ])));
+        assert!(!inserted(&rollout(vec![
+            info(true, false),
+            info(false, false)
+        ])));
+        assert!(!inserted(&rollout(vec![
+            info(false, true),
+            info(true, false)
+        ])));
+        assert!(!inserted(&rollout(vec![])));
+    }
 }
