@@ -18,6 +18,7 @@ pub mod arm;
 pub mod classic;
 mod environment;
 mod error;
+pub mod font;
 
 pub use environment::{Environment, Step, StepInfo};
 pub use error::EnvError;

@@ -2,28 +2,17 @@
 //! forces (true and measured), (4) the x-y path with the wall, the hole channel and the
 //! reference path.
 //!
-//! Text is rendered with the embedded DejaVu Sans (assets/, Bitstream Vera licence), so no
-//! system font library is needed.
+//! Text is rendered with the embedded DejaVu Sans ([`crate::font`]), so no system font library
+//! is needed.
 
 use super::params::ArmConfig;
 use super::trace::TickRecord;
+use crate::font::ensure_font;
 use crate::EnvError;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use plotters::style::{register_font, FontStyle};
 use std::path::Path;
-use std::sync::Once;
-
-static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
-static REGISTER: Once = Once::new();
-
-fn ensure_font() {
-    REGISTER.call_once(|| {
-        // The embedded font is a valid TTF; failure here is a build defect, reported by tests.
-        let _ = register_font("sans-serif", FontStyle::Normal, FONT);
-    });
-}
 
 fn plot_err(path: &Path, e: impl std::fmt::Display) -> EnvError {
     EnvError::Output {
