@@ -1,0 +1,478 @@
+//! The run directory as read from disk (format: /work/pending/run-dir-format.md, mirrored in
+//! the crate docs). Only summary.json is required; everything else may be absent in runs made
+//! before it existed, and its absence becomes a note in the report.
+
+use crate::json::Node;
+use crate::ReportError;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+/// Outcome of the roll-outs of one policy update, as in the thesis's return plots.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Colour {
+    Green,
+    Yellow,
+    Red,
+}
+
+impl Colour {
+    pub fn parse(n: Node<'_>) -> Result<Colour, ReportError> {
+        match n.v.as_str() {
+            Some("green") => Ok(Colour::Green),
+            Some("yellow") => Ok(Colour::Yellow),
+            Some("red") => Ok(Colour::Red),
+            _ => Err(n.malformed("\"green\", \"yellow\" or \"red\"")),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Colour::Green => "green",
+            Colour::Yellow => "yellow",
+            Colour::Red => "red",
+        }
+    }
+}
+
+pub(crate) struct Episode {
+    pub index: u64,
+    pub pred_mean: f64,
+    pub pred_std: f64,
+    pub recorded: f64,
+    pub success: Option<bool>,
+    pub success_fraction: Option<f64>,
+    colour: Option<Colour>,
+    pub train_s: Option<f64>,
+    pub optimise_s: Option<f64>,
+    pub evaluations: Option<u64>,
+}
+
+impl Episode {
+    /// The recorded colour, or (older runs) the first roll-out's success as all-or-nothing.
+    pub fn colour(&self) -> Option<Colour> {
+        self.colour.or(self.success.map(|s| match s {
+            true => Colour::Green,
+            false => Colour::Red,
+        }))
+    }
+}
+
+pub(crate) struct Claim {
+    pub claim: String,
+    pub thesis: String,
+    pub measured: String,
+    pub pass: Option<bool>,
+}
+
+/// Peg-in-hole geometry of the arm experiments, metres.
+pub(crate) struct Geometry {
+    pub wall_x: f64,
+    pub hole_y: f64,
+    pub hole_r: f64,
+    pub end_x: f64,
+}
+
+pub(crate) struct Summary {
+    pub experiment: String,
+    pub seed: u64,
+    pub controller: Option<String>,
+    pub policy: Option<String>,
+    pub n_params: Option<u64>,
+    pub initial_return: Option<f64>,
+    pub episodes: Vec<Episode>,
+    pub solved_at_episode: Option<u64>,
+    pub interaction_s: Option<f64>,
+    pub wall_s: Option<f64>,
+    pub config: Option<Value>,
+    pub geometry: Option<Geometry>,
+    pub start_y_range: Option<(f64, f64)>,
+    /// `config.dt`, the fallback time step when there is no predictions.jsonl.
+    pub config_dt: Option<f64>,
+    pub thesis_reference: Option<Vec<Claim>>,
+}
+
+pub(crate) struct Rollout {
+    pub episode: u64,
+    pub costs: Option<Vec<f64>>,
+    pub actions: Rows,
+    pub true_states: Rows,
+}
+
+/// One predicted step; `t` is the time at the end of the step and `mean`/`var` describe the
+/// state there, while the action fields describe the action applied during the step.
+pub(crate) struct PredStep {
+    pub t: f64,
+    pub mean: Vec<f64>,
+    pub var: Vec<f64>,
+    pub action_mean: Vec<f64>,
+    pub action_var: Vec<f64>,
+    pub weighted_cost: Option<(f64, f64)>,
+}
+
+pub(crate) struct Prediction {
+    pub episode: u64,
+    pub dt: f64,
+    pub state_names: Vec<String>,
+    pub action_names: Vec<String>,
+    /// The first start distribution's steps.
+    pub steps: Vec<PredStep>,
+}
+
+pub(crate) struct FinalEval {
+    pub success: bool,
+    pub true_states: Vec<Vec<f64>>,
+}
+
+pub(crate) struct Run {
+    pub summary: Summary,
+    pub rollouts: Option<Vec<Rollout>>,
+    pub predictions: Option<Vec<Prediction>>,
+    pub final_eval: Option<Vec<FinalEval>>,
+    /// What was absent or ignored while reading; shown in the report.
+    pub notes: Vec<String>,
+}
+
+impl Run {
+    pub fn load(dir: &Path) -> Result<Run, ReportError> {
+        let mut notes = Vec::new();
+        let file = dir.join("summary.json");
+        let v = read_json(&file)?;
+        let summary = parse_summary(Node::root(&file, "", &v))?;
+
+        let rollouts = match read_lines(&dir.join("rollouts.jsonl"), &mut notes)? {
+            Some(lines) => Some(parse_lines(&lines, parse_rollout_line)?),
+            None => read_old_rollouts(&dir.join("rollouts.json"), &mut notes)?,
+        };
+        if rollouts.is_none() {
+            notes.push("no rollouts.jsonl: recorded trajectories are not plotted".into());
+        }
+        let predictions = read_lines(&dir.join("predictions.jsonl"), &mut notes)?
+            .map(|lines| parse_lines(&lines, parse_prediction))
+            .transpose()?;
+        if predictions.is_none() {
+            notes.push("no predictions.jsonl: predicted trajectories are not plotted".into());
+        }
+        let final_eval = read_lines(&dir.join("final_eval.jsonl"), &mut notes)?
+            .map(|lines| parse_lines(&lines, parse_final_eval))
+            .transpose()?;
+        Ok(Run {
+            summary,
+            rollouts,
+            predictions,
+            final_eval,
+            notes,
+        })
+    }
+
+    /// The first roll-out recorded after `episode` updates (the one summary.json describes).
+    pub fn rollout_of(&self, episode: u64) -> Option<&Rollout> {
+        self.rollouts
+            .as_ref()?
+            .iter()
+            .find(|r| r.episode == episode)
+    }
+
+    /// The time step: the predictions' if any, else `config.dt`.
+    pub fn dt(&self) -> Option<f64> {
+        self.predictions
+            .as_ref()
+            .and_then(|p| p.first())
+            .map(|p| p.dt)
+            .or(self.summary.config_dt)
+    }
+}
+
+fn read_text(file: &Path) -> Result<Option<String>, ReportError> {
+    match std::fs::read_to_string(file) {
+        Ok(s) => Ok(Some(s)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(source) => Err(ReportError::Read {
+            file: file.to_path_buf(),
+            source,
+        }),
+    }
+}
+
+fn read_json(file: &Path) -> Result<Value, ReportError> {
+    let text = read_text(file)?.ok_or_else(|| ReportError::Read {
+        file: file.to_path_buf(),
+        source: std::io::ErrorKind::NotFound.into(),
+    })?;
+    serde_json::from_str(&text).map_err(|source| ReportError::Json {
+        file: file.to_path_buf(),
+        location: "whole file".into(),
+        source,
+    })
+}
+
+/// The parsed lines of a .jsonl file, each with its 1-based line number; `None` if the file
+/// does not exist.
+struct Lines {
+    file: PathBuf,
+    values: Vec<(usize, Value)>,
+}
+
+fn read_lines(file: &Path, notes: &mut Vec<String>) -> Result<Option<Lines>, ReportError> {
+    let Some(text) = read_text(file)? else {
+        return Ok(None);
+    };
+    let name = file.file_name().map(|n| n.to_string_lossy().into_owned());
+    let name = name.unwrap_or_default();
+    let numbered: Vec<(usize, &str)> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(i, l)| (i + 1, l))
+        .collect();
+    let mut values = Vec::with_capacity(numbered.len());
+    for (k, &(line, s)) in numbered.iter().enumerate() {
+        match serde_json::from_str(s) {
+            Ok(v) => values.push((line, v)),
+            // The writer appends while a run is going: a cut-off final line is expected then.
+            Err(_) if k + 1 == numbered.len() && !text.ends_with('\n') => {
+                notes.push(format!(
+                    "{name}: ignored the incomplete last line {line} (run still writing?)"
+                ));
+            }
+            Err(source) => {
+                return Err(ReportError::Json {
+                    file: file.to_path_buf(),
+                    location: format!("line {line}"),
+                    source,
+                })
+            }
+        }
+    }
+    Ok(Some(Lines {
+        file: file.to_path_buf(),
+        values,
+    }))
+}
+
+fn parse_lines<T>(
+    lines: &Lines,
+    parse: impl Fn(Node<'_>) -> Result<T, ReportError>,
+) -> Result<Vec<T>, ReportError> {
+    lines
+        .values
+        .iter()
+        .map(|(line, v)| {
+            let prefix = format!("line {line}: ");
+            parse(Node::root(&lines.file, &prefix, v))
+        })
+        .collect()
+}
+
+fn parse_summary(n: Node<'_>) -> Result<Summary, ReportError> {
+    let episodes = n.req("episodes", |e| e.map_array(parse_episode))?;
+    let (geometry, start_y_range, config_dt) = n.with("config", |c| match c {
+        None => Ok((None, None, None)),
+        Some(c) => Ok((
+            c.with("geometry", |g| g.map(parse_geometry).transpose())?,
+            c.with("start_y_range", |r| r.map(parse_interval).transpose())?,
+            c.opt_f64("dt")?,
+        )),
+    })?;
+    Ok(Summary {
+        experiment: n.req("experiment", |e| e.string())?,
+        seed: n.req_u64("seed")?,
+        controller: n.opt_string("controller")?,
+        policy: n.opt_string("policy")?,
+        n_params: n.opt_u64("n_params")?,
+        initial_return: n.opt_f64("initial_return")?,
+        episodes,
+        solved_at_episode: n.opt_u64("solved_at_episode")?,
+        interaction_s: n.opt_f64("interaction_s")?,
+        wall_s: n.opt_f64("wall_s")?,
+        config: n.v.get("config").cloned(),
+        geometry,
+        start_y_range,
+        config_dt,
+        thesis_reference: n.with("thesis_reference", |t| {
+            t.map(|t| t.map_array(parse_claim)).transpose()
+        })?,
+    })
+}
+
+fn parse_episode(n: Node<'_>) -> Result<Episode, ReportError> {
+    Ok(Episode {
+        index: n.req_u64("index")?,
+        pred_mean: n.req_f64("predicted_return_mean")?,
+        pred_std: n.req_f64("predicted_return_std")?,
+        recorded: n.req_f64("recorded_return")?,
+        success: n.opt_bool("success")?,
+        success_fraction: n.opt_f64("success_fraction")?,
+        colour: n.with("colour", |c| c.map(Colour::parse).transpose())?,
+        train_s: n.opt_f64("train_s")?,
+        optimise_s: n.opt_f64("optimise_s")?,
+        evaluations: n.opt_u64("evaluations")?,
+    })
+}
+
+fn parse_geometry(n: Node<'_>) -> Result<Geometry, ReportError> {
+    Ok(Geometry {
+        wall_x: n.req_f64("wall_x")?,
+        hole_y: n.req_f64("hole_y")?,
+        hole_r: n.req_f64("hole_r")?,
+        end_x: n.req_f64("end_x")?,
+    })
+}
+
+fn parse_interval(n: Node<'_>) -> Result<(f64, f64), ReportError> {
+    match n.f64_vec()?.as_slice() {
+        &[a, b] => Ok((a, b)),
+        _ => Err(n.malformed("an array of two numbers")),
+    }
+}
+
+fn parse_claim(n: Node<'_>) -> Result<Claim, ReportError> {
+    // Free-text columns may be numbers in hand-written summaries; show them as written.
+    let text = |key: &str| {
+        n.with(key, |v| match v {
+            None => String::new(),
+            Some(v) => match v.v {
+                Value::String(s) => s.clone(),
+                other => other.to_string(),
+            },
+        })
+    };
+    Ok(Claim {
+        claim: text("claim"),
+        thesis: text("thesis"),
+        measured: text("measured"),
+        pass: n.opt_bool("pass")?,
+    })
+}
+
+/// Rows of numbers, one per step: actions or states.
+type Rows = Vec<Vec<f64>>;
+
+/// The applied actions and the true states of one roll-out.
+fn parse_trajectory(r: Node<'_>) -> Result<(Rows, Rows), ReportError> {
+    Ok((
+        r.req("actions", |a| a.f64_rows())?,
+        r.req("true_states", |s| s.f64_rows())?,
+    ))
+}
+
+fn parse_rollout_line(n: Node<'_>) -> Result<Rollout, ReportError> {
+    let (actions, true_states) = n.req("rollout", parse_trajectory)?;
+    Ok(Rollout {
+        episode: n.req_u64("episode")?,
+        costs: n.with("costs", |c| c.map(|c| c.f64_vec()).transpose())?,
+        actions,
+        true_states,
+    })
+}
+
+/// Runs before rollouts.jsonl wrote one `{"initial": [...], "learned": [...]}` document with
+/// one learned roll-out per update.
+fn read_old_rollouts(
+    file: &Path,
+    notes: &mut Vec<String>,
+) -> Result<Option<Vec<Rollout>>, ReportError> {
+    if !file.exists() {
+        return Ok(None);
+    }
+    let v = read_json(file)?;
+    let n = Node::root(file, "", &v);
+    let list = |key: &str, episode: &dyn Fn(usize) -> u64| {
+        n.with(key, |l| match l {
+            None => Ok(Vec::new()),
+            Some(l) => {
+                let mut i = 0;
+                l.map_array(|r| {
+                    let (actions, true_states) = parse_trajectory(r)?;
+                    i += 1;
+                    Ok(Rollout {
+                        episode: episode(i - 1),
+                        costs: None,
+                        actions,
+                        true_states,
+                    })
+                })
+            }
+        })
+    };
+    let mut all = list("initial", &|_| 0)?;
+    all.extend(list("learned", &|i| i as u64 + 1)?);
+    notes.push("read the older rollouts.json (no recorded costs)".into());
+    Ok(Some(all))
+}
+
+fn parse_prediction(n: Node<'_>) -> Result<Prediction, ReportError> {
+    // Every step of every start must have the first step's dimensions, or the plots would
+    // silently mix up state components.
+    let mut dims: Option<(usize, usize)> = None;
+    let starts = n.req("starts", |s| {
+        s.map_array(|start| {
+            start.map_array(|node| {
+                let step = parse_step(node)?;
+                let d = (step.mean.len(), step.action_mean.len());
+                let d_var = (step.var.len(), step.action_var.len());
+                let want = *dims.get_or_insert(d);
+                if d != want || d_var != want {
+                    return Err(node.malformed(format!(
+                        "mean/var of {} and action_mean/action_var of {} numbers, as in the first step",
+                        want.0, want.1
+                    )));
+                }
+                Ok(step)
+            })
+        })
+    })?;
+    let steps = starts.into_iter().next().unwrap_or_default();
+    if steps.is_empty() {
+        return n.req("starts", |s| {
+            Err(s.malformed("a first start distribution with at least one step"))
+        });
+    }
+    let (ds, da) = dims.unwrap_or_default();
+    let names = |key: &str, d: usize, fallback: &str| -> Result<Vec<String>, ReportError> {
+        n.with(key, |v| match v {
+            None => Ok((1..=d).map(|i| format!("{fallback} {i}")).collect()),
+            Some(v) => {
+                let names = v.string_vec()?;
+                if names.len() != d {
+                    return Err(v.malformed(format!("{d} names (one per dimension)")));
+                }
+                Ok(names)
+            }
+        })
+    };
+    let dt = match n.opt_f64("dt")? {
+        Some(dt) => dt,
+        None => match steps.as_slice() {
+            [a, b, ..] => b.t - a.t,
+            [a] => a.t,
+            [] => 1.0,
+        },
+    };
+    Ok(Prediction {
+        episode: n.req_u64("episode")?,
+        dt,
+        state_names: names("state_names", ds, "state")?,
+        action_names: names("action_names", da, "action")?,
+        steps,
+    })
+}
+
+fn parse_step(n: Node<'_>) -> Result<PredStep, ReportError> {
+    let wm = n.opt_f64("weighted_cost_mean")?;
+    let ws = n.opt_f64("weighted_cost_std")?;
+    Ok(PredStep {
+        t: n.req_f64("t")?,
+        mean: n.req("mean", |v| v.f64_vec())?,
+        var: n.req("var", |v| v.f64_vec())?,
+        action_mean: n.req("action_mean", |v| v.f64_vec())?,
+        action_var: n.req("action_var", |v| v.f64_vec())?,
+        weighted_cost: wm.zip(ws),
+    })
+}
+
+fn parse_final_eval(n: Node<'_>) -> Result<FinalEval, ReportError> {
+    Ok(FinalEval {
+        success: n.req("success", |s| s.bool())?,
+        true_states: n.req("rollout", |r| r.req("true_states", |s| s.f64_rows()))?,
+    })
+}

@@ -1,0 +1,46 @@
+//! Errors of `write_report`: each names the file and, for content, the field at fault.
+
+use std::path::PathBuf;
+
+/// Why a report could not be written.
+///
+/// Absent optional files and fields are not errors (the report skips that part and says so);
+/// present but malformed content is, so a writer bug is not hidden behind a missing plot.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReportError {
+    /// The file (summary.json, or an optional file that exists) could not be read.
+    #[error("{}: cannot read: {source}", file.display())]
+    Read {
+        file: PathBuf,
+        source: std::io::Error,
+    },
+    /// The file, or one line of a .jsonl file, is not JSON.
+    #[error("{}: {location}: not valid JSON: {source}", file.display())]
+    Json {
+        file: PathBuf,
+        /// "whole file" or "line N".
+        location: String,
+        source: serde_json::Error,
+    },
+    /// A required field is absent (or null).
+    #[error("{}: missing field `{field}`", file.display())]
+    Missing { file: PathBuf, field: String },
+    /// A field has the wrong type or shape.
+    #[error("{}: field `{field}`: expected {expected}, found {found}", file.display())]
+    Malformed {
+        file: PathBuf,
+        field: String,
+        expected: String,
+        found: String,
+    },
+    /// An output file could not be written.
+    #[error("{}: cannot write: {source}", file.display())]
+    Write {
+        file: PathBuf,
+        source: std::io::Error,
+    },
+    /// plotters failed while drawing an image.
+    #[error("{}: drawing failed: {message}", file.display())]
+    Plot { file: PathBuf, message: String },
+}

@@ -1,0 +1,219 @@
+//! Which figures a run directory supports, and why the others are skipped.
+
+use crate::data::{Prediction, Run};
+use crate::plot::arm::{FinalEvalPlot, Paths};
+use crate::plot::policy::Policy;
+use crate::plot::prediction::{CostPrediction, StatePrediction};
+use crate::plot::returns::Returns;
+use crate::plot::{save, Figure};
+use crate::ReportError;
+use std::path::{Path, PathBuf};
+
+/// One written figure.
+pub(crate) struct Plot {
+    pub stem: &'static str,
+    pub caption: String,
+    pub png: PathBuf,
+    pub svg: PathBuf,
+}
+
+struct Out<'d> {
+    dir: &'d Path,
+    plots: Vec<Plot>,
+}
+
+impl Out<'_> {
+    fn add(
+        &mut self,
+        fig: &impl Figure,
+        stem: &'static str,
+        caption: String,
+    ) -> Result<(), ReportError> {
+        let (png, svg) = save(fig, self.dir, stem)?;
+        self.plots.push(Plot {
+            stem,
+            caption,
+            png,
+            svg,
+        });
+        Ok(())
+    }
+}
+
+pub(crate) fn draw_all(
+    run: &Run,
+    dir: &Path,
+    notes: &mut Vec<String>,
+) -> Result<Vec<Plot>, ReportError> {
+    let mut out = Out {
+        dir,
+        plots: Vec::new(),
+    };
+    let s = &run.summary;
+    if s.episodes.is_empty() {
+        notes.push("summary.json lists no policy updates yet: no returns plot".into());
+    } else {
+        let caption = "Predicted return (mean, 95 % interval) and recorded return of the first \
+                       roll-out per policy update. Green circle: every roll-out of that update \
+                       succeeds; yellow diamond: some do; red square: none do.";
+        out.add(
+            &Returns {
+                episodes: &s.episodes,
+                initial_return: s.initial_return,
+            },
+            "returns",
+            caption.into(),
+        )?;
+        if s.initial_return.is_none() {
+            notes.push("summary.json has no initial_return: no initial roll-out line".into());
+        }
+    }
+
+    let preds = run.predictions.as_deref().unwrap_or_default();
+    if let (Some(first), Some(last)) = (preds.first(), preds.last()) {
+        policy(run, last, &mut out, notes)?;
+        for (which, p) in [("first", first), ("last", last)] {
+            prediction(run, which, p, &mut out, notes)?;
+        }
+    } else if run.predictions.is_some() {
+        notes.push("predictions.jsonl is empty: no policy or prediction plots".into());
+    }
+
+    arm(run, &mut out, notes)?;
+    Ok(out.plots)
+}
+
+fn policy(
+    run: &Run,
+    last: &Prediction,
+    out: &mut Out,
+    notes: &mut Vec<String>,
+) -> Result<(), ReportError> {
+    let final_rollout = run.rollout_of(last.episode);
+    let initial = run.rollout_of(0);
+    if run.rollouts.is_some() && final_rollout.is_none() {
+        notes.push(format!(
+            "no roll-out of update {} recorded: policy plot without its applied actions",
+            last.episode
+        ));
+    }
+    if run.rollouts.is_some() && initial.is_none() {
+        notes.push("no initial roll-out (episode 0) recorded: policy plot without it".into());
+    }
+    out.add(
+        &Policy {
+            pred: last,
+            last: final_rollout,
+            initial,
+        },
+        "policy",
+        format!(
+            "Final policy (update {}): predicted action distribution (mean ± 2σ) over time, with \
+             the actions applied in that update's roll-out and in the initial exploration roll-out.",
+            last.episode
+        ),
+    )
+}
+
+fn prediction(
+    run: &Run,
+    which: &'static str,
+    p: &Prediction,
+    out: &mut Out,
+    notes: &mut Vec<String>,
+) -> Result<(), ReportError> {
+    let rollout = run.rollout_of(p.episode);
+    if run.rollouts.is_some() && rollout.is_none() {
+        notes.push(format!(
+            "no roll-out of update {} recorded: its predictions are plotted alone",
+            p.episode
+        ));
+    }
+    let (state_stem, cost_stem) = match which {
+        "first" => ("prediction_first", "cost_first"),
+        _ => ("prediction_last", "cost_last"),
+    };
+    out.add(
+        &StatePrediction { pred: p, rollout },
+        state_stem,
+        format!(
+            "Long-term prediction of the {which} optimised policy (update {}): each state \
+             dimension's predicted mean ± 2σ against the states recorded in its roll-out.",
+            p.episode
+        ),
+    )?;
+    if p.steps.iter().any(|s| s.weighted_cost.is_none()) {
+        notes.push(format!(
+            "predictions.jsonl, update {}: no weighted_cost_mean/std per step: no {cost_stem} plot",
+            p.episode
+        ));
+        return Ok(());
+    }
+    let recorded = rollout.and_then(|r| r.costs.as_deref().map(|c| (c, r.episode)));
+    if rollout.is_some() && recorded.is_none() {
+        notes.push(format!(
+            "roll-out of update {} has no recorded costs: {cost_stem} shows the prediction alone",
+            p.episode
+        ));
+    }
+    out.add(
+        &CostPrediction { pred: p, recorded },
+        cost_stem,
+        format!(
+            "Immediate cost of the {which} optimised policy (update {}): predicted mean ± 2σ \
+             against the cost recorded in its roll-out (same weighting).",
+            p.episode
+        ),
+    )
+}
+
+fn arm(run: &Run, out: &mut Out, notes: &mut Vec<String>) -> Result<(), ReportError> {
+    let s = &run.summary;
+    let Some(g) = &s.geometry else {
+        if run.final_eval.is_some() {
+            notes.push("final_eval.jsonl without config.geometry: plotted without the hole".into());
+        }
+        return final_eval(run, out, notes);
+    };
+    match run.rollouts.as_deref() {
+        Some(r) if !r.is_empty() => out.add(
+            &Paths {
+                rollouts: r,
+                geometry: g,
+                start_y_range: s.start_y_range,
+            },
+            "paths",
+            "TCP x–y path of every roll-out (grey: initial; colour: policy update, dark to \
+             light), with the wall and the hole channel."
+                .into(),
+        )?,
+        _ => notes.push("no recorded roll-outs: no paths plot".into()),
+    }
+    final_eval(run, out, notes)
+}
+
+fn final_eval(run: &Run, out: &mut Out, notes: &mut Vec<String>) -> Result<(), ReportError> {
+    let Some(evals) = run.final_eval.as_deref() else {
+        return Ok(());
+    };
+    if evals.is_empty() {
+        notes.push("final_eval.jsonl is empty: no final_eval plot".into());
+        return Ok(());
+    }
+    let dt = run.dt();
+    if dt.is_none() {
+        notes
+            .push("no time step (predictions.jsonl or config.dt): final_eval is over steps".into());
+    }
+    out.add(
+        &FinalEvalPlot {
+            evals,
+            geometry: run.summary.geometry.as_ref(),
+            dt,
+        },
+        "final_eval",
+        "The final policy from fresh start positions: y(t) of each roll-out, green if it \
+         inserts, red if not."
+            .into(),
+    )
+}

@@ -1,0 +1,280 @@
+//! report.html: one file with every image inlined as a data: URI, so it can be mailed or
+//! archived alone. Every string from the run files is escaped.
+
+use crate::data::{Colour, Run};
+use crate::figures::Plot;
+use crate::ReportError;
+use base64::Engine;
+use serde_json::Value;
+use std::fmt::Write;
+use std::path::Path;
+
+/// Escapes text for HTML element content and double- or single-quoted attributes.
+pub(crate) fn esc(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for ch in s.chars() {
+        match ch {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+const STYLE: &str = r#"
+body { font-family: "DejaVu Sans", "Segoe UI", Helvetica, Arial, sans-serif; color: #222;
+       max-width: 1120px; margin: 1.5em auto; padding: 0 1em; }
+h1 { font-size: 1.7em; margin-bottom: 0.1em; }
+h2 { font-size: 1.25em; margin-top: 1.8em; border-bottom: 1px solid #ccc; padding-bottom: 0.2em; }
+p.sub { color: #555; margin-top: 0; }
+table { border-collapse: collapse; margin: 0.5em 0 1em; font-size: 14px; }
+th, td { border: 1px solid #c8c8c8; padding: 3px 8px; text-align: left; vertical-align: top; }
+th { background: #e8eef5; }
+tbody tr:nth-child(even) { background: #f6f6f6; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+table.settings td { white-space: pre-wrap; word-break: break-word; max-width: 760px; }
+table.settings td:first-child { font-family: "DejaVu Sans Mono", monospace; white-space: nowrap; }
+.swatch { display: inline-block; width: 13px; height: 13px; border: 1px solid #444;
+          border-radius: 3px; vertical-align: -2px; margin-right: 5px; }
+.green { background: #229622; } .yellow { background: #ebb900; } .red { background: #d22323; }
+.unknown { background: #fff; }
+td.pass { background: #d7f0d7; color: #125f12; font-weight: bold; }
+td.fail { background: #f6d5d5; color: #8a1010; font-weight: bold; }
+td.na { color: #777; }
+figure { margin: 1.2em 0 2em; }
+figure img { max-width: 100%; height: auto; border: 1px solid #ddd; }
+figcaption { font-size: 14px; color: #444; margin-top: 0.3em; }
+"#;
+
+fn num(v: Option<f64>, decimals: usize) -> String {
+    v.map_or_else(|| "–".into(), |v| format!("{v:.decimals$}"))
+}
+
+/// Config keys as dotted paths (`geometry.wall_x`); arrays stay one JSON value.
+fn flatten(prefix: &str, v: &Value, out: &mut Vec<(String, String)>) {
+    match v {
+        Value::Object(m) if !m.is_empty() => {
+            for (k, v) in m {
+                let key = if prefix.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{prefix}.{k}")
+                };
+                flatten(&key, v, out);
+            }
+        }
+        Value::String(s) => out.push((prefix.into(), s.clone())),
+        other => out.push((prefix.into(), compact(other))),
+    }
+}
+
+/// JSON with a space after each array comma, so long vectors can wrap in the table.
+fn compact(v: &Value) -> String {
+    match v {
+        Value::Array(items) => {
+            let items: Vec<String> = items.iter().map(compact).collect();
+            format!("[{}]", items.join(", "))
+        }
+        other => other.to_string(),
+    }
+}
+
+fn image(plot: &Plot) -> Result<String, ReportError> {
+    let bytes = std::fs::read(&plot.png).map_err(|source| ReportError::Read {
+        file: plot.png.clone(),
+        source,
+    })?;
+    Ok(base64::engine::general_purpose::STANDARD.encode(bytes))
+}
+
+fn file_name(p: &Path) -> String {
+    p.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+pub(crate) fn render(
+    run: &Run,
+    dir: &Path,
+    plots: &[Plot],
+    notes: &[String],
+) -> Result<String, ReportError> {
+    let s = &run.summary;
+    // Writing into a String cannot fail; the results are ignored for that reason only.
+    let mut h = String::new();
+    let title = format!("{} — seed {}", s.experiment, s.seed);
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
+         <title>vicpilco report: {}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n\
+         <h1>{}</h1>\n",
+        esc(&title),
+        esc(&title)
+    );
+    let mut sub = Vec::new();
+    if let Some(p) = &s.policy {
+        sub.push(format!("policy: {}", esc(p)));
+    }
+    if let Some(n) = s.n_params {
+        sub.push(format!("{n} parameters"));
+    }
+    if let Some(c) = &s.controller {
+        sub.push(format!("controller: {}", esc(c)));
+    }
+    let _ = writeln!(h, "<p class=\"sub\">{}</p>", sub.join(" · "));
+
+    settings(&mut h, s.config.as_ref());
+    episodes(&mut h, run);
+    thesis(&mut h, run);
+    totals(&mut h, run);
+
+    h.push_str("<h2>Plots</h2>\n");
+    if plots.is_empty() {
+        h.push_str("<p>No plots: see the notes below.</p>\n");
+    }
+    for p in plots {
+        let _ = writeln!(
+            h,
+            "<figure id=\"{stem}\">\n<img alt=\"{stem}\" src=\"data:image/png;base64,{data}\">\n\
+             <figcaption>{caption} Files: <a href=\"{svg}\">{svg}</a>, <a href=\"{png}\">{png}</a>.\
+             </figcaption>\n</figure>",
+            stem = p.stem,
+            data = image(p)?,
+            caption = esc(&p.caption),
+            svg = esc(&file_name(&p.svg)),
+            png = esc(&file_name(&p.png)),
+        );
+    }
+    if !notes.is_empty() {
+        h.push_str("<h2>Not shown</h2>\n<ul>\n");
+        for n in notes {
+            let _ = writeln!(h, "<li>{}</li>", esc(n));
+        }
+        h.push_str("</ul>\n");
+    }
+    let _ = write!(
+        h,
+        "<p class=\"sub\">Written by vicpilco-report {} from {}.</p>\n</body>\n</html>\n",
+        env!("CARGO_PKG_VERSION"),
+        esc(&dir.display().to_string())
+    );
+    Ok(h)
+}
+
+fn settings(h: &mut String, config: Option<&Value>) {
+    h.push_str("<h2>Settings</h2>\n");
+    let mut rows = Vec::new();
+    if let Some(c) = config {
+        flatten("", c, &mut rows);
+    }
+    if rows.is_empty() {
+        h.push_str("<p>summary.json has no config.</p>\n");
+        return;
+    }
+    h.push_str("<table class=\"settings\">\n<thead><tr><th>setting</th><th>value</th></tr></thead>\n<tbody>\n");
+    for (k, v) in rows {
+        let _ = writeln!(h, "<tr><td>{}</td><td>{}</td></tr>", esc(&k), esc(&v));
+    }
+    h.push_str("</tbody></table>\n");
+}
+
+fn episodes(h: &mut String, run: &Run) {
+    h.push_str("<h2>Policy updates</h2>\n");
+    let eps = &run.summary.episodes;
+    if eps.is_empty() {
+        h.push_str("<p>No policy updates recorded yet.</p>\n");
+        return;
+    }
+    h.push_str(
+        "<table class=\"episodes\">\n<thead><tr><th>update</th><th>predicted return</th>\
+         <th>recorded return</th><th>outcome</th><th>success fraction</th><th>train [s]</th>\
+         <th>optimise [s]</th><th>evaluations</th></tr></thead>\n<tbody>\n",
+    );
+    for e in eps {
+        let (class, name) = match e.colour() {
+            Some(c) => (c.name(), c.name()),
+            None => ("unknown", "–"),
+        };
+        let name = match e.colour() {
+            Some(Colour::Green) => "all succeed",
+            Some(Colour::Yellow) => "some succeed",
+            Some(Colour::Red) => "none succeed",
+            None => name,
+        };
+        let _ = writeln!(
+            h,
+            "<tr><td class=\"num\">{}</td><td class=\"num\">{:.2} ± {:.2}</td>\
+             <td class=\"num\">{:.2}</td><td><span class=\"swatch {class}\"></span>{name}</td>\
+             <td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td>\
+             <td class=\"num\">{}</td></tr>",
+            e.index,
+            e.pred_mean,
+            e.pred_std,
+            e.recorded,
+            num(e.success_fraction, 2),
+            num(e.train_s, 1),
+            num(e.optimise_s, 1),
+            e.evaluations.map_or_else(|| "–".into(), |v| v.to_string()),
+        );
+    }
+    h.push_str("</tbody></table>\n");
+}
+
+fn thesis(h: &mut String, run: &Run) {
+    h.push_str("<h2>Against the thesis</h2>\n");
+    let Some(claims) = &run.summary.thesis_reference else {
+        h.push_str("<p>summary.json has no thesis_reference.</p>\n");
+        return;
+    };
+    if claims.is_empty() {
+        h.push_str("<p>No thesis claims apply to this experiment.</p>\n");
+        return;
+    }
+    h.push_str(
+        "<table class=\"thesis\">\n<thead><tr><th>claim</th><th>thesis</th><th>measured</th>\
+         <th>verdict</th></tr></thead>\n<tbody>\n",
+    );
+    for c in claims {
+        let (class, verdict) = match c.pass {
+            Some(true) => ("pass", "PASS"),
+            Some(false) => ("fail", "FAIL"),
+            None => ("na", "n.a."),
+        };
+        let _ = writeln!(
+            h,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td class=\"{class}\">{verdict}</td></tr>",
+            esc(&c.claim),
+            esc(&c.thesis),
+            esc(&c.measured)
+        );
+    }
+    h.push_str("</tbody></table>\n");
+}
+
+fn totals(h: &mut String, run: &Run) {
+    let s = &run.summary;
+    h.push_str("<h2>Totals</h2>\n<table class=\"totals\"><tbody>\n");
+    let per_update = match (s.wall_s, s.episodes.len()) {
+        (Some(w), n) if n > 0 => Some(w / n as f64),
+        _ => None,
+    };
+    let solved = match (s.solved_at_episode, s.episodes.is_empty()) {
+        (Some(k), _) => format!("update {k}"),
+        (None, false) => "not solved".into(),
+        (None, true) => "–".into(),
+    };
+    for (k, v) in [
+        ("interaction time [s]", num(s.interaction_s, 1)),
+        ("wall time [s]", num(s.wall_s, 1)),
+        ("mean wall time per policy update [s]", num(per_update, 1)),
+        ("policy updates", s.episodes.len().to_string()),
+        ("solved at", solved),
+    ] {
+        let _ = writeln!(h, "<tr><th>{k}</th><td class=\"num\">{}</td></tr>", esc(&v));
+    }
+    h.push_str("</tbody></table>\n");
+}

@@ -1,0 +1,59 @@
+//! Plots and a self-contained HTML report of one run directory.
+//!
+//! [`write_report`] reads DIR/summary.json (required) and, where present, rollouts.jsonl,
+//! predictions.jsonl and final_eval.jsonl (format: `crates/experiments`' run directories), and
+//! writes into DIR:
+//!
+//! * `returns`: predicted return ± 1.96σ per policy update against the recorded return;
+//! * `policy`: the final policy's actions over time against the applied ones;
+//! * `prediction_first`, `prediction_last`: long-term state predictions against the recording;
+//! * `cost_first`, `cost_last`: predicted against recorded immediate cost;
+//! * arm runs: `paths` (x–y paths with wall and hole) and, with final_eval.jsonl, `final_eval`;
+//!
+//! each as PNG and SVG, and `report.html` with the settings, per-update results, the thesis
+//! comparison, totals and every PNG inlined. Runs from before a file or field existed still
+//! get a report; what could not be drawn is listed in it.
+
+mod data;
+mod error;
+mod figures;
+mod html;
+mod json;
+mod plot;
+
+#[cfg(test)]
+#[path = "../tests/common/synthetic.rs"]
+mod synthetic;
+#[cfg(test)]
+mod tests;
+
+pub use error::ReportError;
+use std::path::{Path, PathBuf};
+
+/// What [`write_report`] wrote.
+#[derive(Clone, Debug)]
+pub struct ReportFiles {
+    pub html: PathBuf,
+    /// Every PNG and SVG, in report order.
+    pub images: Vec<PathBuf>,
+    /// Why a figure or part of one is missing, as shown in the report.
+    pub notes: Vec<String>,
+}
+
+/// Reads the run directory `dir` and writes the plots and report.html into it.
+pub fn write_report(dir: &Path) -> Result<ReportFiles, ReportError> {
+    let run = data::Run::load(dir)?;
+    let mut notes = run.notes.clone();
+    let plots = figures::draw_all(&run, dir, &mut notes)?;
+    let page = html::render(&run, dir, &plots, &notes)?;
+    let file = dir.join("report.html");
+    std::fs::write(&file, page).map_err(|source| ReportError::Write {
+        file: file.clone(),
+        source,
+    })?;
+    Ok(ReportFiles {
+        html: file,
+        images: plots.into_iter().flat_map(|p| [p.png, p.svg]).collect(),
+        notes,
+    })
+}

@@ -1,0 +1,238 @@
+//! (e) Arm experiments only: the x–y path of every roll-out against the wall and the hole, and
+//! y(t) of the final policy from fresh starts (vilta-var).
+
+use super::{chart, gradient, legend, place_legend, range, Axes, DrawResult, Figure, Occupied};
+use super::{FAIL_RED, GREY, OK_GREEN, RECORDED};
+use crate::data::{FinalEval, Geometry, Rollout};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+const WALL_FILL: RGBColor = RGBColor(215, 215, 215);
+const WALL_EDGE: RGBColor = RGBColor(90, 90, 90);
+const HOLE: &str = "hole channel (y range)";
+
+pub(crate) struct Paths<'a> {
+    pub rollouts: &'a [Rollout],
+    pub geometry: &'a Geometry,
+    pub start_y_range: Option<(f64, f64)>,
+}
+
+fn xy(r: &Rollout) -> Vec<(f64, f64)> {
+    let pts = r.true_states.iter();
+    pts.filter_map(|s| Some((*s.first()?, *s.get(1)?)))
+        .collect()
+}
+
+impl Figure for Paths<'_> {
+    fn size(&self) -> (u32, u32) {
+        (1100, 800)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let g = self.geometry;
+        let paths: Vec<(u64, Vec<(f64, f64)>)> =
+            self.rollouts.iter().map(|r| (r.episode, xy(r))).collect();
+        let n_updates = paths.iter().map(|p| p.0).max().unwrap_or(0).max(1) as usize;
+        let start = paths.iter().find_map(|p| p.1.first().copied());
+        let (y_lo, y_hi) = (g.hole_y - g.hole_r, g.hole_y + g.hole_r);
+        let sy = self.start_y_range.map(|(a, b)| [a, b]).unwrap_or_default();
+        let xs = paths.iter().flat_map(|p| p.1.iter().map(|q| q.0));
+        let x = range(xs.chain([g.wall_x, g.end_x]), 0.08);
+        let ys = paths.iter().flat_map(|p| p.1.iter().map(|q| q.1));
+        let y = range(ys.chain([y_lo, y_hi]).chain(sy), 0.08);
+
+        // Legend entries only for the initial, the first and the last update: the colour
+        // gradient orders the ones in between.
+        let mut labelled = std::collections::BTreeSet::new();
+        let first_update = paths.iter().map(|p| p.0).filter(|&e| e > 0).min();
+        let path_labels: Vec<Option<String>> = paths
+            .iter()
+            .map(|(episode, _)| {
+                let e = *episode;
+                let wanted = e == 0 || Some(e) == first_update || e as usize == n_updates;
+                if !wanted || !labelled.insert(e) {
+                    return None;
+                }
+                Some(match e {
+                    0 => "initial roll-out".to_string(),
+                    e => format!("update {e}"),
+                })
+            })
+            .collect();
+        let face_label = format!(
+            "wall face x = {} m, hole y = {} ± {} m",
+            g.wall_x, g.hole_y, g.hole_r
+        );
+        let start_label = self
+            .start_y_range
+            .filter(|_| start.is_some())
+            .map(|(a, b)| format!("start interval y ∈ [{a}, {b}] m"));
+        let mut labels = vec!["wall".to_string(), face_label.clone()];
+        labels.extend(path_labels.iter().flatten().cloned());
+        labels.extend(start_label.clone());
+        let mut occ = Occupied::default();
+        occ.band(&[g.wall_x, x.1], &[y.0, y.0], &[y.1, y.1]);
+        paths.iter().for_each(|p| occ.line(p.1.iter().copied()));
+        if let (Some((a, b)), Some((x0, _))) = (self.start_y_range, start) {
+            occ.line([(x0, a), (x0, b)]);
+        }
+        let mut axes = Axes {
+            title: "TCP paths of every roll-out",
+            x,
+            y,
+            x_desc: "x [m]",
+            y_desc: "y [m]",
+            integer_x: false,
+        };
+        let pos = place_legend(&occ, &mut axes, root.dim_in_pixel(), &labels);
+        let y = axes.y;
+        let mut c = chart(root, &axes)?;
+
+        // The wall is solid everywhere right of its face except the channel, which ends at end_x.
+        let blocks = [
+            [(g.wall_x, y.0), (x.1, y_lo)],
+            [(g.wall_x, y_hi), (x.1, y.1)],
+            [(g.end_x, y_lo), (x.1, y_hi)],
+        ];
+        c.draw_series(
+            blocks
+                .iter()
+                .map(|b| Rectangle::new(*b, WALL_FILL.filled())),
+        )?
+        .label("wall")
+        .legend(|(x, y)| Rectangle::new([(x, y - 6), (x + 18, y + 6)], WALL_FILL.filled()));
+        let outline = [
+            vec![(g.wall_x, y.0), (g.wall_x, y_lo), (g.end_x, y_lo)],
+            vec![(g.end_x, y_lo), (g.end_x, y_hi)],
+            vec![(g.end_x, y_hi), (g.wall_x, y_hi), (g.wall_x, y.1)],
+        ];
+        c.draw_series(
+            outline
+                .into_iter()
+                .map(|l| PathElement::new(l, WALL_EDGE.stroke_width(2))),
+        )?
+        .label(format!(
+            "wall face x = {} m, hole y = {} ± {} m",
+            g.wall_x, g.hole_y, g.hole_r
+        ))
+        .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], WALL_EDGE.stroke_width(2)));
+
+        for ((episode, pts), label) in paths.iter().zip(path_labels) {
+            let colour = match *episode {
+                0 => GREY,
+                e => gradient(e as usize - 1, n_updates),
+            };
+            let s = c.draw_series(LineSeries::new(pts.iter().copied(), colour.stroke_width(2)))?;
+            if let Some(label) = label {
+                s.label(label).legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(3))
+                });
+            }
+        }
+        if let (Some((a, b)), Some((x0, _)), Some(label)) = (self.start_y_range, start, start_label)
+        {
+            c.draw_series(std::iter::once(PathElement::new(
+                [(x0, a), (x0, b)],
+                RECORDED.stroke_width(4),
+            )))?
+            .label(label)
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RECORDED.stroke_width(4)));
+        }
+        legend(&mut c, pos)
+    }
+}
+
+pub(crate) struct FinalEvalPlot<'a> {
+    pub evals: &'a [FinalEval],
+    pub geometry: Option<&'a Geometry>,
+    /// Without a time step the x axis counts steps.
+    pub dt: Option<f64>,
+}
+
+impl Figure for FinalEvalPlot<'_> {
+    fn size(&self) -> (u32, u32) {
+        (1000, 600)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let dt = self.dt.unwrap_or(1.0);
+        let curves: Vec<(bool, Vec<(f64, f64)>)> = self
+            .evals
+            .iter()
+            .map(|e| {
+                let pts = e.true_states.iter().enumerate();
+                let pts = pts.filter_map(|(k, s)| Some((k as f64 * dt, *s.get(1)?)));
+                (e.success, pts.collect())
+            })
+            .collect();
+        let hole = self
+            .geometry
+            .map(|g| (g.hole_y - g.hole_r, g.hole_y + g.hole_r));
+        let x = range(curves.iter().flat_map(|c| c.1.iter().map(|q| q.0)), 0.0);
+        let ys = curves.iter().flat_map(|c| c.1.iter().map(|q| q.1));
+        let y = range(ys.chain(hole.map(|h| [h.0, h.1]).unwrap_or_default()), 0.08);
+        let n = curves.len();
+        let ok = curves.iter().filter(|c| c.0).count();
+        let title = format!("Final policy from {n} fresh starts: {ok} of {n} insert");
+        let mut axes = Axes {
+            title: &title,
+            x,
+            y,
+            x_desc: if self.dt.is_some() {
+                "time [s]"
+            } else {
+                "step"
+            },
+            y_desc: "y [m]",
+            integer_x: false,
+        };
+        let groups = [(true, OK_GREEN, "inserts"), (false, FAIL_RED, "fails")].map(
+            |(success, colour, word)| {
+                let count = curves.iter().filter(|c| c.0 == success).count();
+                (success, colour, format!("{word} ({count} of {n})"), count)
+            },
+        );
+        let mut occ = Occupied::default();
+        curves.iter().for_each(|c| occ.line(c.1.iter().copied()));
+        let mut labels: Vec<String> = hole.iter().map(|_| HOLE.to_string()).collect();
+        labels.extend(groups.iter().filter(|g| g.3 > 0).map(|g| g.2.clone()));
+        let pos = place_legend(&occ, &mut axes, root.dim_in_pixel(), &labels);
+        let mut c = chart(root, &axes)?;
+        if let Some((lo, hi)) = hole {
+            c.draw_series(std::iter::once(Rectangle::new(
+                [(x.0, lo), (x.1, hi)],
+                WALL_EDGE.mix(0.35).filled(),
+            )))?
+            .label(HOLE)
+            .legend(|(x, y)| {
+                Rectangle::new([(x, y - 6), (x + 18, y + 6)], WALL_EDGE.mix(0.35).filled())
+            });
+        }
+        for (success, colour, label, _) in groups {
+            let mut group = curves.iter().filter(|c| c.0 == success);
+            if let Some(first) = group.next() {
+                c.draw_series(LineSeries::new(
+                    first.1.iter().copied(),
+                    colour.stroke_width(2),
+                ))?
+                .label(label)
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(3))
+                });
+            }
+            for curve in group {
+                c.draw_series(LineSeries::new(
+                    curve.1.iter().copied(),
+                    colour.stroke_width(2),
+                ))?;
+            }
+        }
+        legend(&mut c, pos)
+    }
+}

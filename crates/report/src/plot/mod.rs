@@ -1,0 +1,371 @@
+//! The report's figures. Each figure draws through a generic plotters backend once for PNG (the
+//! report embeds it) and once for SVG (for papers), so the two never drift apart.
+
+pub(crate) mod arm;
+pub(crate) mod policy;
+pub(crate) mod prediction;
+pub(crate) mod returns;
+
+use crate::ReportError;
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+use vicpilco_env::font::{ensure_font, FAMILY};
+
+pub(crate) type DrawResult = Result<(), Box<dyn std::error::Error>>;
+pub(crate) type Cart = Cartesian2d<RangedCoordf64, RangedCoordf64>;
+
+pub(crate) trait Figure {
+    fn size(&self) -> (u32, u32);
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static;
+}
+
+/// Draws `fig` into DIR/STEM.png and DIR/STEM.svg; returns both paths.
+pub(crate) fn save(
+    fig: &impl Figure,
+    dir: &Path,
+    stem: &str,
+) -> Result<(PathBuf, PathBuf), ReportError> {
+    ensure_font();
+    let png = dir.join(format!("{stem}.png"));
+    let svg = dir.join(format!("{stem}.svg"));
+    let fail = |file: &Path, e: Box<dyn std::error::Error>| ReportError::Plot {
+        file: file.to_path_buf(),
+        message: e.to_string(),
+    };
+    render(
+        &BitMapBackend::new(&png, fig.size()).into_drawing_area(),
+        fig,
+    )
+    .map_err(|e| fail(&png, e))?;
+    render(&SVGBackend::new(&svg, fig.size()).into_drawing_area(), fig)
+        .map_err(|e| fail(&svg, e))?;
+    Ok((png, svg))
+}
+
+fn render<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, fig: &impl Figure) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    fig.draw(root)?;
+    root.present()?;
+    Ok(())
+}
+
+pub(crate) const OK_GREEN: RGBColor = RGBColor(34, 150, 34);
+/// Darker than pure yellow so the markers stay visible on white.
+pub(crate) const SOME_YELLOW: RGBColor = RGBColor(235, 185, 0);
+pub(crate) const FAIL_RED: RGBColor = RGBColor(210, 35, 35);
+pub(crate) const PRED_BLUE: RGBColor = RGBColor(31, 119, 180);
+pub(crate) const RECORDED: RGBColor = RGBColor(20, 20, 20);
+pub(crate) const GREY: RGBColor = RGBColor(150, 150, 150);
+
+pub(crate) const TITLE_PX: u32 = 22;
+const MARGIN: u32 = 14;
+/// Room for the last x tick label, which is centred on the plot's right edge.
+const MARGIN_RIGHT: u32 = 26;
+const X_LABEL_AREA: u32 = 48;
+const Y_LABEL_AREA: u32 = 78;
+pub(crate) const LABEL_PX: u32 = 16;
+pub(crate) const TICK_PX: u32 = 14;
+
+/// Axis range of `vals` padded by `pad` of its span; a flat or empty series still gets a
+/// usable range.
+pub(crate) fn range(vals: impl IntoIterator<Item = f64>, pad: f64) -> (f64, f64) {
+    let (lo, hi) = vals
+        .into_iter()
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    let span = hi - lo;
+    if span <= 1e-12 * lo.abs().max(hi.abs()) || span == 0.0 {
+        let half = 0.05 * lo.abs().max(1.0);
+        return (lo - half, hi + half);
+    }
+    (lo - pad * span, hi + pad * span)
+}
+
+/// What one chart shows along its axes.
+pub(crate) struct Axes<'s> {
+    pub title: &'s str,
+    pub x: (f64, f64),
+    pub y: (f64, f64),
+    pub x_desc: &'s str,
+    pub y_desc: &'s str,
+    /// Label only whole numbers on x (episode indices).
+    pub integer_x: bool,
+}
+
+/// A chart with title, axis descriptions and a light grid.
+pub(crate) fn chart<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    axes: &Axes<'_>,
+) -> Result<ChartContext<'a, DB, Cart>, Box<dyn std::error::Error>>
+where
+    DB::ErrorType: 'static,
+{
+    let mut c = ChartBuilder::on(area)
+        .caption(axes.title, (FAMILY, TITLE_PX))
+        .margin(MARGIN)
+        .margin_right(MARGIN_RIGHT)
+        .x_label_area_size(X_LABEL_AREA)
+        .y_label_area_size(Y_LABEL_AREA)
+        .build_cartesian_2d(axes.x.0..axes.x.1, axes.y.0..axes.y.1)?;
+    let whole = |v: &f64| {
+        if (v - v.round()).abs() < 1e-9 {
+            format!("{}", v.round() + 0.0)
+        } else {
+            String::new()
+        }
+    };
+    let mut mesh = c.configure_mesh();
+    mesh.x_desc(axes.x_desc)
+        .y_desc(axes.y_desc)
+        .axis_desc_style((FAMILY, LABEL_PX))
+        .label_style((FAMILY, TICK_PX))
+        .light_line_style(BLACK.mix(0.05))
+        .bold_line_style(BLACK.mix(0.15));
+    if axes.integer_x {
+        let span = (axes.x.1 - axes.x.0).ceil().max(1.0) as usize;
+        mesh.x_labels(span.min(16) + 1).x_label_formatter(&whole);
+    }
+    mesh.draw()?;
+    Ok(c)
+}
+
+/// The data a legend should not cover, collected while a figure is prepared.
+#[derive(Default)]
+pub(crate) struct Occupied {
+    lines: Vec<Vec<(f64, f64)>>,
+    bands: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)>,
+}
+
+impl Occupied {
+    pub fn line(&mut self, pts: impl IntoIterator<Item = (f64, f64)>) {
+        self.lines.push(pts.into_iter().collect());
+    }
+
+    pub fn band(&mut self, xs: &[f64], lo: &[f64], hi: &[f64]) {
+        self.bands.push((xs.to_vec(), lo.to_vec(), hi.to_vec()));
+    }
+
+    /// Sample points in the unit square of the axes: lines densified along their segments,
+    /// bands filled, so a legend box cannot hide between two data points.
+    fn samples(&self, x: (f64, f64), y: (f64, f64)) -> Vec<(f64, f64)> {
+        let norm = |p: (f64, f64)| ((p.0 - x.0) / (x.1 - x.0), (p.1 - y.0) / (y.1 - y.0));
+        let mut out = Vec::new();
+        for l in &self.lines {
+            out.extend(l.first().map(|&p| norm(p)));
+            for w in l.windows(2) {
+                let (a, b) = (norm(w[0]), norm(w[1]));
+                let n = ((b.0 - a.0).hypot(b.1 - a.1) / 0.01)
+                    .ceil()
+                    .clamp(1.0, 200.0) as usize;
+                out.extend((1..=n).map(|k| {
+                    let f = k as f64 / n as f64;
+                    (a.0 + f * (b.0 - a.0), a.1 + f * (b.1 - a.1))
+                }));
+            }
+        }
+        for (xs, lo, hi) in &self.bands {
+            for i in 0..xs.len() {
+                let j = (i + 1).min(xs.len() - 1);
+                for k in 0..10 {
+                    let f = k as f64 / 10.0;
+                    let lerp = |v: &[f64]| v[i] + f * (v[j] - v[i]);
+                    let (xv, l, h) = (lerp(xs), lerp(lo), lerp(hi));
+                    out.extend((0..=6).map(|m| norm((xv, l + (h - l) * m as f64 / 6.0))));
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Picks the corner where a legend with `labels` covers the fewest data samples; if every
+/// corner holds data, raises the top of `axes.y` so the legend sits above all of it.
+pub(crate) fn place_legend(
+    occupied: &Occupied,
+    axes: &mut Axes<'_>,
+    area_px: (u32, u32),
+    labels: &[String],
+) -> SeriesLabelPosition {
+    let plot_w = area_px
+        .0
+        .saturating_sub(Y_LABEL_AREA + MARGIN + MARGIN_RIGHT)
+        .max(1) as f64;
+    let plot_h = area_px
+        .1
+        .saturating_sub(X_LABEL_AREA + 2 * MARGIN + TITLE_PX + 12)
+        .max(1) as f64;
+    let longest = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0) as f64;
+    // Legend box as plotters draws it (14 px text, sample glyph, padding, offset from corner).
+    let fw = ((60.0 + 8.0 * longest) / plot_w).min(1.0);
+    let fh = ((24.0 + 21.0 * labels.len() as f64) / plot_h).min(1.0);
+    let samples = occupied.samples(axes.x, axes.y);
+    let corners = [
+        (
+            SeriesLabelPosition::UpperRight,
+            (1.0 - fw, 1.0),
+            (1.0 - fh, 1.0),
+        ),
+        (SeriesLabelPosition::UpperLeft, (0.0, fw), (1.0 - fh, 1.0)),
+        (SeriesLabelPosition::LowerRight, (1.0 - fw, 1.0), (0.0, fh)),
+        (SeriesLabelPosition::LowerLeft, (0.0, fw), (0.0, fh)),
+    ];
+    let inside = |bx: (f64, f64), by: (f64, f64)| {
+        let hits = samples.iter().filter(|p| (bx.0..=bx.1).contains(&p.0));
+        hits.filter(|p| (by.0..=by.1).contains(&p.1)).count()
+    };
+    let scored = corners.map(|(pos, bx, by)| (inside(bx, by), pos));
+    let best = scored.iter().enumerate().min_by_key(|(i, (n, _))| (*n, *i));
+    match best {
+        Some((_, (0, pos))) => pos.clone(),
+        _ if fh < 0.6 => {
+            let (y0, y1) = axes.y;
+            axes.y.1 = (y1 - fh * y0) / (1.0 - fh);
+            SeriesLabelPosition::UpperRight
+        }
+        Some((_, (_, pos))) => pos.clone(),
+        None => SeriesLabelPosition::UpperRight,
+    }
+}
+
+pub(crate) fn legend<'a, DB: DrawingBackend + 'a>(
+    c: &mut ChartContext<'a, DB, Cart>,
+    pos: SeriesLabelPosition,
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    c.configure_series_labels()
+        .position(pos)
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK.mix(0.4))
+        .label_font((FAMILY, TICK_PX))
+        .draw()?;
+    Ok(())
+}
+
+/// The closed outline between `lo` and `hi` over `xs`, for a filled uncertainty band.
+pub(crate) fn band(xs: &[f64], lo: &[f64], hi: &[f64]) -> Vec<(f64, f64)> {
+    let upper = xs.iter().zip(hi).map(|(&x, &y)| (x, y));
+    let lower = xs.iter().zip(lo).rev().map(|(&x, &y)| (x, y));
+    upper.chain(lower).collect()
+}
+
+/// Zero-order hold: value `v[k]` from `t0 + k dt` to `t0 + (k + 1) dt`, as a polyline.
+pub(crate) fn stairs(t0: f64, dt: f64, v: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let mut ts = Vec::with_capacity(2 * v.len());
+    let mut ys = Vec::with_capacity(2 * v.len());
+    for (k, &y) in v.iter().enumerate() {
+        ts.extend([t0 + k as f64 * dt, t0 + (k + 1) as f64 * dt]);
+        ys.extend([y, y]);
+    }
+    (ts, ys)
+}
+
+/// A standard deviation from a variance that rounding may have made slightly negative.
+pub(crate) fn std_of(var: f64) -> f64 {
+    var.max(0.0).sqrt()
+}
+
+/// How a state or action name is shown, and its unit if known. The run files use both the
+/// simulator's short names (`xd`, `fx`) and spelled-out ones (`xdot`, `f_x`).
+pub(crate) fn pretty(name: &str) -> (String, Option<&'static str>) {
+    let (shown, unit) = match name {
+        "x" | "y" => (name, Some("m")),
+        "xd" | "xdot" => ("ẋ", Some("m/s")),
+        "yd" | "ydot" => ("ẏ", Some("m/s")),
+        "fx" | "f_x" => ("f_x", Some("N")),
+        "fy" | "f_y" => ("f_y", Some("N")),
+        "k_x" | "kx" => ("k_x", Some("N/m")),
+        "k_y" | "ky" => ("k_y", Some("N/m")),
+        "dx_ref" => ("Δx_ref", Some("m")),
+        "dy_ref" => ("Δy_ref", Some("m")),
+        "theta" => ("θ", Some("rad")),
+        "dtheta" => ("dθ/dt", Some("rad/s")),
+        "v" => ("v", Some("m/s")),
+        "torque" => ("torque", Some("N m")),
+        "force" => ("force", Some("N")),
+        other => (other, None),
+    };
+    (shown.to_string(), unit)
+}
+
+/// "name [unit]" for an axis description.
+pub(crate) fn axis_label(name: &str) -> String {
+    match pretty(name) {
+        (shown, Some(unit)) => format!("{shown} [{unit}]"),
+        (shown, None) => shown,
+    }
+}
+
+/// A perceptually ordered colour for update `i` of `n` (viridis, sampled at five stops), so
+/// early and late roll-outs are told apart at a glance.
+pub(crate) fn gradient(i: usize, n: usize) -> RGBColor {
+    const STOPS: [(f64, f64, f64); 5] = [
+        (68.0, 1.0, 84.0),
+        (59.0, 82.0, 139.0),
+        (33.0, 145.0, 140.0),
+        (94.0, 201.0, 98.0),
+        (223.0, 200.0, 30.0),
+    ];
+    let f = if n <= 1 {
+        1.0
+    } else {
+        i as f64 / (n - 1) as f64
+    };
+    let pos = f.clamp(0.0, 1.0) * (STOPS.len() - 1) as f64;
+    let k = (pos.floor() as usize).min(STOPS.len() - 2);
+    let w = pos - k as f64;
+    let (a, b) = (STOPS[k], STOPS[k + 1]);
+    let mix = |x: f64, y: f64| (x + (y - x) * w).round() as u8;
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// Splits `root` into a grid of `n` panels, two per row when there is more than one.
+pub(crate) fn panels<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    n: usize,
+) -> Vec<DrawingArea<DB, Shift>> {
+    let cols = if n > 1 { 2 } else { 1 };
+    let rows = n.div_ceil(cols).max(1);
+    root.split_evenly((rows, cols))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn range_survives_flat_empty_and_nan() {
+        assert_eq!(range([], 0.1), (0.0, 1.0));
+        let (lo, hi) = range([2.0, 2.0], 0.0);
+        assert!(lo < 2.0 && hi > 2.0);
+        let (lo, hi) = range([f64::NAN, 1.0, 3.0], 0.0);
+        assert_eq!((lo, hi), (1.0, 3.0));
+    }
+
+    #[test]
+    fn stairs_hold_each_value_for_one_step() {
+        let (t, y) = stairs(0.0, 0.5, &[1.0, 2.0]);
+        assert_eq!(t, [0.0, 0.5, 0.5, 1.0]);
+        assert_eq!(y, [1.0, 1.0, 2.0, 2.0]);
+    }
+
+    #[test]
+    fn gradient_ends_are_the_viridis_ends() {
+        assert_eq!(gradient(0, 5), RGBColor(68, 1, 84));
+        assert_eq!(gradient(4, 5), RGBColor(223, 200, 30));
+        assert_eq!(gradient(0, 1), RGBColor(223, 200, 30));
+    }
+}

@@ -1,0 +1,134 @@
+//! (b) The final policy's action profiles over time: the predicted action distribution (mean
+//! ± 2σ) of the last policy update against the actions actually applied in that update's
+//! roll-out and in the initial exploration roll-out (thesis Figs 5-6, 5-12, right).
+
+use super::{axis_label, band, chart, legend, panels, pretty, range, stairs, std_of};
+use super::{place_legend, Axes, DrawResult, Figure, Occupied, GREY, PRED_BLUE, RECORDED};
+use crate::data::{Prediction, Rollout};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+pub(crate) struct Policy<'a> {
+    pub pred: &'a Prediction,
+    pub last: Option<&'a Rollout>,
+    pub initial: Option<&'a Rollout>,
+}
+
+const BAND: &str = "predicted ±2σ";
+const MEAN: &str = "predicted mean";
+const INITIAL: &str = "initial roll-out (exploration)";
+
+/// Actions are held over each step, so every profile is drawn as a staircase.
+fn recorded(r: &Rollout, j: usize, dt: f64) -> Option<(Vec<f64>, Vec<f64>)> {
+    let v: Option<Vec<f64>> = r.actions.iter().map(|a| a.get(j).copied()).collect();
+    v.filter(|v| !v.is_empty()).map(|v| stairs(0.0, dt, &v))
+}
+
+impl Figure for Policy<'_> {
+    fn size(&self) -> (u32, u32) {
+        let n = self.pred.action_names.len().max(1);
+        let w = if n > 1 { 1400 } else { 1000 };
+        (w, 480 * n.div_ceil(2) as u32)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let p = self.pred;
+        let dt = p.dt;
+        let t0 = p.steps.first().map_or(0.0, |s| s.t - dt);
+        for (j, area) in panels(root, p.action_names.len()).iter().enumerate() {
+            let Some(name) = p.action_names.get(j) else {
+                break;
+            };
+            let mean: Vec<f64> = p.steps.iter().map(|s| s.action_mean[j]).collect();
+            let sd: Vec<f64> = p
+                .steps
+                .iter()
+                .map(|s| 2.0 * std_of(s.action_var[j]))
+                .collect();
+            let (ts, m) = stairs(t0, dt, &mean);
+            let lo: Vec<f64> = m
+                .iter()
+                .zip(stairs(t0, dt, &sd).1)
+                .map(|(m, s)| m - s)
+                .collect();
+            let hi: Vec<f64> = m
+                .iter()
+                .zip(stairs(t0, dt, &sd).1)
+                .map(|(m, s)| m + s)
+                .collect();
+            let last = self.last.and_then(|r| recorded(r, j, dt));
+            let initial = self.initial.and_then(|r| recorded(r, j, dt));
+
+            let others = [&last, &initial].into_iter().flatten();
+            let t_end = others.clone().filter_map(|(t, _)| t.last().copied());
+            let x = range(ts.iter().copied().chain(t_end).chain([0.0]), 0.0);
+            let y_vals = lo.iter().chain(&hi).copied();
+            let y = range(
+                y_vals.chain(others.flat_map(|(_, v)| v.iter().copied())),
+                0.06,
+            );
+            let title = format!("{} — final policy (update {})", pretty(name).0, p.episode);
+            let y_desc = axis_label(name);
+            let mut axes = Axes {
+                title: &title,
+                x,
+                y,
+                x_desc: "time [s]",
+                y_desc: &y_desc,
+                integer_x: false,
+            };
+            let applied = self
+                .last
+                .map(|r| format!("applied, roll-out of update {}", r.episode));
+            let pos = (j == 0).then(|| {
+                let mut occ = Occupied::default();
+                occ.band(&ts, &lo, &hi);
+                for (t, v) in [&last, &initial].into_iter().flatten() {
+                    occ.line(t.iter().copied().zip(v.iter().copied()));
+                }
+                let mut labels = vec![BAND.to_string(), MEAN.to_string()];
+                labels.extend(initial.as_ref().map(|_| INITIAL.to_string()));
+                labels.extend(last.as_ref().and(applied.clone()));
+                place_legend(&occ, &mut axes, area.dim_in_pixel(), &labels)
+            });
+            let mut c = chart(area, &axes)?;
+            c.draw_series(std::iter::once(Polygon::new(
+                band(&ts, &lo, &hi),
+                PRED_BLUE.mix(0.2).filled(),
+            )))?
+            .label(BAND)
+            .legend(|(x, y)| {
+                Rectangle::new([(x, y - 6), (x + 18, y + 6)], PRED_BLUE.mix(0.2).filled())
+            });
+            c.draw_series(LineSeries::new(
+                ts.iter().copied().zip(m.iter().copied()),
+                PRED_BLUE.stroke_width(2),
+            ))?
+            .label(MEAN)
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], PRED_BLUE.stroke_width(2)));
+            if let Some((t, v)) = &initial {
+                c.draw_series(LineSeries::new(
+                    t.iter().copied().zip(v.iter().copied()),
+                    GREY.stroke_width(1),
+                ))?
+                .label(INITIAL)
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], GREY.stroke_width(2)));
+            }
+            if let (Some((t, v)), Some(applied)) = (&last, applied) {
+                c.draw_series(LineSeries::new(
+                    t.iter().copied().zip(v.iter().copied()),
+                    RECORDED.stroke_width(2),
+                ))?
+                .label(applied)
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RECORDED.stroke_width(2)));
+            }
+            if let Some(pos) = pos {
+                legend(&mut c, pos)?;
+            }
+        }
+        Ok(())
+    }
+}
