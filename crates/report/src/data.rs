@@ -186,9 +186,9 @@ fn read_text(file: &Path) -> Result<Option<String>, ReportError> {
     match std::fs::read_to_string(file) {
         Ok(s) => Ok(Some(s)),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-        Err(source) => Err(ReportError::Read {
+        Err(error) => Err(ReportError::Read {
             file: file.to_path_buf(),
-            source,
+            error,
         }),
     }
 }
@@ -196,12 +196,15 @@ fn read_text(file: &Path) -> Result<Option<String>, ReportError> {
 fn read_json(file: &Path) -> Result<Value, ReportError> {
     let text = read_text(file)?.ok_or_else(|| ReportError::Read {
         file: file.to_path_buf(),
-        source: std::io::ErrorKind::NotFound.into(),
+        error: std::io::Error::new(
+            std::io::ErrorKind::NotFound,
+            "no such file (is this a run directory?)",
+        ),
     })?;
-    serde_json::from_str(&text).map_err(|source| ReportError::Json {
+    serde_json::from_str(&text).map_err(|error| ReportError::Json {
         file: file.to_path_buf(),
         location: "whole file".into(),
-        source,
+        error,
     })
 }
 
@@ -234,11 +237,11 @@ fn read_lines(file: &Path, notes: &mut Vec<String>) -> Result<Option<Lines>, Rep
                     "{name}: ignored the incomplete last line {line} (run still writing?)"
                 ));
             }
-            Err(source) => {
+            Err(error) => {
                 return Err(ReportError::Json {
                     file: file.to_path_buf(),
                     location: format!("line {line}"),
-                    source,
+                    error,
                 })
             }
         }

@@ -1,4 +1,7 @@
 //! Errors of `write_report`: each names the file and, for content, the field at fault.
+//!
+//! The underlying error is part of each message rather than a `source()`, so the message is
+//! complete however it is printed and anyhow's chain does not repeat it.
 
 use std::path::PathBuf;
 
@@ -10,18 +13,18 @@ use std::path::PathBuf;
 #[non_exhaustive]
 pub enum ReportError {
     /// The file (summary.json, or an optional file that exists) could not be read.
-    #[error("{}: cannot read: {source}", file.display())]
+    #[error("{}: cannot read: {error}", file.display())]
     Read {
         file: PathBuf,
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// The file, or one line of a .jsonl file, is not JSON.
-    #[error("{}: {location}: not valid JSON: {source}", file.display())]
+    #[error("{}: {location}: not valid JSON: {error}", file.display())]
     Json {
         file: PathBuf,
         /// "whole file" or "line N".
         location: String,
-        source: serde_json::Error,
+        error: serde_json::Error,
     },
     /// A required field is absent (or null).
     #[error("{}: missing field `{field}`", file.display())]
@@ -35,10 +38,10 @@ pub enum ReportError {
         found: String,
     },
     /// An output file could not be written.
-    #[error("{}: cannot write: {source}", file.display())]
+    #[error("{}: cannot write: {error}", file.display())]
     Write {
         file: PathBuf,
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// plotters failed while drawing an image.
     #[error("{}: drawing failed: {message}", file.display())]

@@ -84,9 +84,9 @@ fn compact(v: &Value) -> String {
 }
 
 fn image(plot: &Plot) -> Result<String, ReportError> {
-    let bytes = std::fs::read(&plot.png).map_err(|source| ReportError::Read {
+    let bytes = std::fs::read(&plot.png).map_err(|error| ReportError::Read {
         file: plot.png.clone(),
-        source,
+        error,
     })?;
     Ok(base64::engine::general_purpose::STANDARD.encode(bytes))
 }

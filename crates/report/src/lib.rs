@@ -47,9 +47,9 @@ pub fn write_report(dir: &Path) -> Result<ReportFiles, ReportError> {
     let plots = figures::draw_all(&run, dir, &mut notes)?;
     let page = html::render(&run, dir, &plots, &notes)?;
     let file = dir.join("report.html");
-    std::fs::write(&file, page).map_err(|source| ReportError::Write {
+    std::fs::write(&file, page).map_err(|error| ReportError::Write {
         file: file.clone(),
-        source,
+        error,
     })?;
     Ok(ReportFiles {
         html: file,

@@ -1,8 +1,10 @@
 //! (e) Arm experiments only: the x–y path of every roll-out against the wall and the hole, and
 //! y(t) of the final policy from fresh starts (vilta-var).
 
-use super::{chart, gradient, legend, place_legend, range, Axes, DrawResult, Figure, Occupied};
-use super::{FAIL_RED, GREY, OK_GREEN, RECORDED};
+use super::{
+    chart, clip, gradient, legend, place_legend, range, short, Axes, DrawResult, Figure, Occupied,
+};
+use super::{segments, FAIL_RED, GREY, OK_GREEN, RECORDED};
 use crate::data::{FinalEval, Geometry, Rollout};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -10,6 +12,7 @@ use plotters::prelude::*;
 const WALL_FILL: RGBColor = RGBColor(215, 215, 215);
 const WALL_EDGE: RGBColor = RGBColor(90, 90, 90);
 const HOLE: &str = "hole channel (y range)";
+const WALL: &str = "wall";
 
 pub(crate) struct Paths<'a> {
     pub rollouts: &'a [Rollout],
@@ -23,9 +26,20 @@ fn xy(r: &Rollout) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// Everything both panels of the paths figure draw.
+struct Scene<'a> {
+    g: &'a Geometry,
+    paths: Vec<(u64, Vec<(f64, f64)>)>,
+    /// Legend entries only for the initial, the first and the last update: the colour
+    /// gradient orders the ones in between.
+    path_labels: Vec<Option<String>>,
+    n_updates: usize,
+    start: Option<(f64, (f64, f64))>,
+}
+
 impl Figure for Paths<'_> {
     fn size(&self) -> (u32, u32) {
-        (1100, 800)
+        (1600, 760)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
@@ -36,19 +50,9 @@ impl Figure for Paths<'_> {
         let paths: Vec<(u64, Vec<(f64, f64)>)> =
             self.rollouts.iter().map(|r| (r.episode, xy(r))).collect();
         let n_updates = paths.iter().map(|p| p.0).max().unwrap_or(0).max(1) as usize;
-        let start = paths.iter().find_map(|p| p.1.first().copied());
-        let (y_lo, y_hi) = (g.hole_y - g.hole_r, g.hole_y + g.hole_r);
-        let sy = self.start_y_range.map(|(a, b)| [a, b]).unwrap_or_default();
-        let xs = paths.iter().flat_map(|p| p.1.iter().map(|q| q.0));
-        let x = range(xs.chain([g.wall_x, g.end_x]), 0.08);
-        let ys = paths.iter().flat_map(|p| p.1.iter().map(|q| q.1));
-        let y = range(ys.chain([y_lo, y_hi]).chain(sy), 0.08);
-
-        // Legend entries only for the initial, the first and the last update: the colour
-        // gradient orders the ones in between.
         let mut labelled = std::collections::BTreeSet::new();
         let first_update = paths.iter().map(|p| p.0).filter(|&e| e > 0).min();
-        let path_labels: Vec<Option<String>> = paths
+        let path_labels = paths
             .iter()
             .map(|(episode, _)| {
                 let e = *episode;
@@ -62,34 +66,86 @@ impl Figure for Paths<'_> {
                 })
             })
             .collect();
+        let start_x = paths.iter().find_map(|p| p.1.first().map(|q| q.0));
+        let scene = Scene {
+            g,
+            start: start_x.zip(self.start_y_range),
+            paths,
+            path_labels,
+            n_updates,
+        };
+
+        let (full, zoom) = root.split_horizontally(900);
+        let sy = self.start_y_range.map(|(a, b)| [a, b]).unwrap_or_default();
+        let hole = [g.hole_y - g.hole_r, g.hole_y + g.hole_r];
+        let xs = scene.paths.iter().flat_map(|p| p.1.iter().map(|q| q.0));
+        let x = range(xs.chain([g.wall_x, g.end_x]), 0.08);
+        let ys = scene.paths.iter().flat_map(|p| p.1.iter().map(|q| q.1));
+        let y = range(ys.chain(hole).chain(sy), 0.08);
+        scene.panel(&full, "TCP paths of every roll-out", x, y, true)?;
+
+        // Same metres per pixel on both axes of the 700 × 700 zoom panel, so the channel keeps
+        // its shape.
+        let depth = (g.end_x - g.wall_x).abs().max(4.0 * g.hole_r).max(1e-3);
+        let x = (g.wall_x - 0.3 * depth, g.end_x + 0.1 * depth);
+        let half = 0.5 * (x.1 - x.0);
+        scene.panel(
+            &zoom,
+            "near the hole",
+            x,
+            (g.hole_y - half, g.hole_y + half),
+            false,
+        )
+    }
+}
+
+impl Scene<'_> {
+    fn panel<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        title: &str,
+        x: (f64, f64),
+        y: (f64, f64),
+        with_legend: bool,
+    ) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let g = self.g;
+        let (y_lo, y_hi) = (g.hole_y - g.hole_r, g.hole_y + g.hole_r);
         let face_label = format!(
             "wall face x = {} m, hole y = {} ± {} m",
-            g.wall_x, g.hole_y, g.hole_r
+            short(g.wall_x),
+            short(g.hole_y),
+            short(g.hole_r)
         );
         let start_label = self
-            .start_y_range
-            .filter(|_| start.is_some())
-            .map(|(a, b)| format!("start interval y ∈ [{a}, {b}] m"));
-        let mut labels = vec!["wall".to_string(), face_label.clone()];
-        labels.extend(path_labels.iter().flatten().cloned());
-        labels.extend(start_label.clone());
-        let mut occ = Occupied::default();
-        occ.band(&[g.wall_x, x.1], &[y.0, y.0], &[y.1, y.1]);
-        paths.iter().for_each(|p| occ.line(p.1.iter().copied()));
-        if let (Some((a, b)), Some((x0, _))) = (self.start_y_range, start) {
-            occ.line([(x0, a), (x0, b)]);
-        }
+            .start
+            .map(|(_, (a, b))| format!("start interval y ∈ [{}, {}] m", short(a), short(b)));
         let mut axes = Axes {
-            title: "TCP paths of every roll-out",
+            title,
             x,
             y,
             x_desc: "x [m]",
             y_desc: "y [m]",
             integer_x: false,
         };
-        let pos = place_legend(&occ, &mut axes, root.dim_in_pixel(), &labels);
+        let pos = with_legend.then(|| {
+            let mut labels = vec![WALL.to_string(), face_label.clone()];
+            labels.extend(self.path_labels.iter().flatten().cloned());
+            labels.extend(start_label.clone());
+            let mut occ = Occupied::default();
+            occ.band(&[g.wall_x, x.1], &[y.0, y.0], &[y.1, y.1]);
+            self.paths
+                .iter()
+                .for_each(|p| occ.line(p.1.iter().copied()));
+            if let Some((x0, (a, b))) = self.start {
+                occ.line([(x0, a), (x0, b)]);
+            }
+            place_legend(&occ, &mut axes, area.dim_in_pixel(), &labels)
+        });
         let y = axes.y;
-        let mut c = chart(root, &axes)?;
+        let mut c = chart(area, &axes)?;
 
         // The wall is solid everywhere right of its face except the channel, which ends at end_x.
         let blocks = [
@@ -97,51 +153,49 @@ impl Figure for Paths<'_> {
             [(g.wall_x, y_hi), (x.1, y.1)],
             [(g.end_x, y_lo), (x.1, y_hi)],
         ];
-        c.draw_series(
-            blocks
-                .iter()
-                .map(|b| Rectangle::new(*b, WALL_FILL.filled())),
-        )?
-        .label("wall")
-        .legend(|(x, y)| Rectangle::new([(x, y - 6), (x + 18, y + 6)], WALL_FILL.filled()));
+        let blocks = blocks.map(|b| Rectangle::new(b, WALL_FILL.filled()));
+        c.draw_series(blocks)?
+            .label(WALL)
+            .legend(|(x, y)| Rectangle::new([(x, y - 6), (x + 18, y + 6)], WALL_FILL.filled()));
         let outline = [
             vec![(g.wall_x, y.0), (g.wall_x, y_lo), (g.end_x, y_lo)],
             vec![(g.end_x, y_lo), (g.end_x, y_hi)],
             vec![(g.end_x, y_hi), (g.wall_x, y_hi), (g.wall_x, y.1)],
         ];
-        c.draw_series(
-            outline
-                .into_iter()
-                .map(|l| PathElement::new(l, WALL_EDGE.stroke_width(2))),
-        )?
-        .label(format!(
-            "wall face x = {} m, hole y = {} ± {} m",
-            g.wall_x, g.hole_y, g.hole_r
-        ))
-        .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], WALL_EDGE.stroke_width(2)));
+        let outline = outline.map(|l| PathElement::new(l, WALL_EDGE.stroke_width(2)));
+        c.draw_series(outline)?
+            .label(face_label)
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], WALL_EDGE.stroke_width(2)));
 
-        for ((episode, pts), label) in paths.iter().zip(path_labels) {
+        for ((episode, pts), label) in self.paths.iter().zip(&self.path_labels) {
             let colour = match *episode {
                 0 => GREY,
-                e => gradient(e as usize - 1, n_updates),
+                e => gradient(e as usize - 1, self.n_updates),
             };
-            let s = c.draw_series(LineSeries::new(pts.iter().copied(), colour.stroke_width(2)))?;
+            let pieces = clip(pts, x, y);
+            let lines = pieces
+                .into_iter()
+                .flat_map(|p| segments(p, colour.stroke_width(2)));
+            let s = c.draw_series(lines)?;
             if let Some(label) = label {
                 s.label(label).legend(move |(x, y)| {
                     PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(3))
                 });
             }
         }
-        if let (Some((a, b)), Some((x0, _)), Some(label)) = (self.start_y_range, start, start_label)
-        {
-            c.draw_series(std::iter::once(PathElement::new(
-                [(x0, a), (x0, b)],
-                RECORDED.stroke_width(4),
-            )))?
-            .label(label)
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RECORDED.stroke_width(4)));
+        if let (Some((x0, (a, b))), Some(label)) = (self.start, start_label) {
+            let segment = clip(&[(x0, a), (x0, b)], x, y);
+            let segment = segment
+                .into_iter()
+                .map(|p| PathElement::new(p, RECORDED.stroke_width(4)));
+            c.draw_series(segment)?
+                .label(label)
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RECORDED.stroke_width(4)));
         }
-        legend(&mut c, pos)
+        match pos {
+            Some(pos) => legend(&mut c, pos),
+            None => Ok(()),
+        }
     }
 }
 
@@ -217,20 +271,14 @@ impl Figure for FinalEvalPlot<'_> {
         for (success, colour, label, _) in groups {
             let mut group = curves.iter().filter(|c| c.0 == success);
             if let Some(first) = group.next() {
-                c.draw_series(LineSeries::new(
-                    first.1.iter().copied(),
-                    colour.stroke_width(2),
-                ))?
-                .label(label)
-                .legend(move |(x, y)| {
-                    PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(3))
-                });
+                c.draw_series(segments(first.1.iter().copied(), colour.stroke_width(2)))?
+                    .label(label)
+                    .legend(move |(x, y)| {
+                        PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(3))
+                    });
             }
             for curve in group {
-                c.draw_series(LineSeries::new(
-                    curve.1.iter().copied(),
-                    colour.stroke_width(2),
-                ))?;
+                c.draw_series(segments(curve.1.iter().copied(), colour.stroke_width(2)))?;
             }
         }
         legend(&mut c, pos)

@@ -90,7 +90,16 @@ pub(crate) fn range(vals: impl IntoIterator<Item = f64>, pad: f64) -> (f64, f64)
         let half = 0.05 * lo.abs().max(1.0);
         return (lo - half, hi + half);
     }
-    (lo - pad * span, hi + pad * span)
+    let padded = (lo - pad * span, hi + pad * span);
+    // Values near f64::MAX would overflow the padding; plotters cannot draw infinite ranges.
+    match (
+        padded.0.is_finite() && padded.1.is_finite(),
+        span.is_finite(),
+    ) {
+        (true, _) => padded,
+        (false, true) => (lo, hi),
+        (false, false) => (0.0, 1.0),
+    }
 }
 
 /// What one chart shows along its axes.
@@ -126,8 +135,12 @@ where
             String::new()
         }
     };
+    let x_fmt = tick_formatter(axes.x);
+    let y_fmt = tick_formatter(axes.y);
     let mut mesh = c.configure_mesh();
-    mesh.x_desc(axes.x_desc)
+    mesh.x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
+        .x_desc(axes.x_desc)
         .y_desc(axes.y_desc)
         .axis_desc_style((FAMILY, LABEL_PX))
         .label_style((FAMILY, TICK_PX))
@@ -139,6 +152,43 @@ where
     }
     mesh.draw()?;
     Ok(c)
+}
+
+/// Tick labels with as many decimals as the tick spacing of `range` needs and no float noise
+/// (plotters' own labels show `-0.0` and `0.30000000000000004`).
+fn tick_formatter(range: (f64, f64)) -> impl Fn(&f64) -> String {
+    // plotters spaces at most 10 labels 1, 2 or 5 × 10^k apart, so span / 12 bounds the step
+    // from below and never asks for too few decimals.
+    let step = ((range.1 - range.0) / 12.0).abs();
+    let decimals = if step > 0.0 && step.is_finite() {
+        (-step.log10().floor()).clamp(0.0, 12.0) as usize
+    } else {
+        3
+    };
+    move |v: &f64| trim_number(&format!("{v:.decimals$}"))
+}
+
+/// Drops trailing zeros and a minus sign on zero: "0.500" → "0.5", "-0.00" → "0".
+fn trim_number(s: &str) -> String {
+    let t = if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.')
+    } else {
+        s
+    };
+    if t.trim_start_matches('-').chars().all(|c| c == '0') {
+        "0".into()
+    } else {
+        t.into()
+    }
+}
+
+/// A number for a label: six significant digits at most, so 0.6499999999999999 reads 0.65.
+pub(crate) fn short(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let decimals = (5.0 - v.abs().log10().floor()).clamp(0.0, 12.0) as usize;
+    trim_number(&format!("{v:.decimals$}"))
 }
 
 /// The data a legend should not cover, collected while a figure is prepared.
@@ -154,7 +204,9 @@ impl Occupied {
     }
 
     pub fn band(&mut self, xs: &[f64], lo: &[f64], hi: &[f64]) {
-        self.bands.push((xs.to_vec(), lo.to_vec(), hi.to_vec()));
+        let n = xs.len().min(lo.len()).min(hi.len());
+        self.bands
+            .push((xs[..n].to_vec(), lo[..n].to_vec(), hi[..n].to_vec()));
     }
 
     /// Sample points in the unit square of the axes: lines densified along their segments,
@@ -273,6 +325,98 @@ pub(crate) fn stairs(t0: f64, dt: f64, v: &[f64]) -> (Vec<f64>, Vec<f64>) {
     (ts, ys)
 }
 
+/// A polyline as separate two-point segments. plotters joins thick polylines with mitres
+/// whose inner vertex shoots far off at near-reversals (a jittery path in the hole), drawing
+/// long false spikes; unjoined segments cannot.
+pub(crate) fn segments(
+    pts: impl IntoIterator<Item = (f64, f64)>,
+    style: ShapeStyle,
+) -> Vec<PathElement<(f64, f64)>> {
+    let pts: Vec<(f64, f64)> = pts.into_iter().collect();
+    pts.windows(2)
+        .map(|w| PathElement::new(vec![w[0], w[1]], style))
+        .collect()
+}
+
+/// The parts of a polyline inside the box `x` × `y`. plotters clamps points outside a chart
+/// onto its border, which would draw false lines along the axes of a zoomed view.
+pub(crate) fn clip(pts: &[(f64, f64)], x: (f64, f64), y: (f64, f64)) -> Vec<Vec<(f64, f64)>> {
+    let mut pieces: Vec<Vec<(f64, f64)>> = Vec::new();
+    let mut current: Vec<(f64, f64)> = Vec::new();
+    for w in pts.windows(2) {
+        let Some((a, b)) = clip_segment(w[0], w[1], x, y) else {
+            if !current.is_empty() {
+                pieces.push(std::mem::take(&mut current));
+            }
+            continue;
+        };
+        if current.last() != Some(&a) {
+            if !current.is_empty() {
+                pieces.push(std::mem::take(&mut current));
+            }
+            current.push(a);
+        }
+        current.push(b);
+        // A segment that leaves the box ends this piece.
+        if b != w[1] {
+            pieces.push(std::mem::take(&mut current));
+        }
+    }
+    if !current.is_empty() {
+        pieces.push(current);
+    }
+    if let [p] = pts {
+        let inside = (x.0..=x.1).contains(&p.0) && (y.0..=y.1).contains(&p.1);
+        if inside {
+            pieces.push(vec![*p]);
+        }
+    }
+    pieces
+}
+
+/// Liang–Barsky: the part of the segment a–b inside the box, if any.
+fn clip_segment(
+    a: (f64, f64),
+    b: (f64, f64),
+    x: (f64, f64),
+    y: (f64, f64),
+) -> Option<((f64, f64), (f64, f64))> {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for (p, q) in [
+        (-dx, a.0 - x.0),
+        (dx, x.1 - a.0),
+        (-dy, a.1 - y.0),
+        (dy, y.1 - a.1),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return None;
+            }
+        } else {
+            let r = q / p;
+            if p < 0.0 {
+                t0 = t0.max(r);
+            } else {
+                t1 = t1.min(r);
+            }
+        }
+    }
+    if t0 > t1 {
+        return None;
+    }
+    let at = |t: f64| {
+        if t == 0.0 {
+            a
+        } else if t == 1.0 {
+            b
+        } else {
+            (a.0 + t * dx, a.1 + t * dy)
+        }
+    };
+    Some((at(t0), at(t1)))
+}
+
 /// A standard deviation from a variance that rounding may have made slightly negative.
 pub(crate) fn std_of(var: f64) -> f64 {
     var.max(0.0).sqrt()
@@ -353,6 +497,41 @@ mod tests {
         assert!(lo < 2.0 && hi > 2.0);
         let (lo, hi) = range([f64::NAN, 1.0, 3.0], 0.0);
         assert_eq!((lo, hi), (1.0, 3.0));
+        let (lo, hi) = range([-f64::MAX, f64::MAX], 0.1);
+        assert!(lo.is_finite() && hi.is_finite() && lo < hi);
+    }
+
+    #[test]
+    fn labels_have_no_float_noise() {
+        assert_eq!(short(0.6499999999999999), "0.65");
+        assert_eq!(short(0.005), "0.005");
+        assert_eq!(short(250.0), "250");
+        assert_eq!(short(-1.5e-7), "-0.00000015");
+        let f = tick_formatter((-0.1, 0.15));
+        assert_eq!(f(&-1e-17), "0");
+        assert_eq!(f(&0.15000000000000002), "0.15");
+        assert_eq!(f(&0.05), "0.05");
+        let f = tick_formatter((0.0, 300.0));
+        assert_eq!(f(&250.0), "250");
+    }
+
+    #[test]
+    fn clipping_keeps_only_the_inside() {
+        let unit = ((0.0, 1.0), (0.0, 1.0));
+        // In, out through the right edge, back in: two pieces, cut at x = 1.
+        let pts = [(0.5, 0.5), (1.5, 0.5), (0.5, 0.6)];
+        let pieces = clip(&pts, unit.0, unit.1);
+        assert_eq!(pieces.len(), 2);
+        assert_eq!(pieces[0], [(0.5, 0.5), (1.0, 0.5)]);
+        assert_eq!(pieces[1].last(), Some(&(0.5, 0.6)));
+        assert!((pieces[1][0].0 - 1.0).abs() < 1e-12);
+        // Entirely outside, and a crossing segment with both ends outside.
+        assert!(clip(&[(2.0, 2.0), (3.0, 2.0)], unit.0, unit.1).is_empty());
+        let through = clip(&[(-1.0, 0.5), (2.0, 0.5)], unit.0, unit.1);
+        assert_eq!(through, [vec![(0.0, 0.5), (1.0, 0.5)]]);
+        // A path fully inside stays one piece with every point.
+        let inside = [(0.1, 0.1), (0.2, 0.3), (0.4, 0.2)];
+        assert_eq!(clip(&inside, unit.0, unit.1), [inside.to_vec()]);
     }
 
     #[test]

@@ -3,7 +3,9 @@
 //! roll-out and in the initial exploration roll-out (thesis Figs 5-6, 5-12, right).
 
 use super::{axis_label, band, chart, legend, panels, pretty, range, stairs, std_of};
-use super::{place_legend, Axes, DrawResult, Figure, Occupied, GREY, PRED_BLUE, RECORDED};
+use super::{
+    place_legend, segments, Axes, DrawResult, Figure, Occupied, GREY, PRED_BLUE, RECORDED,
+};
 use crate::data::{Prediction, Rollout};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -103,14 +105,14 @@ impl Figure for Policy<'_> {
             .legend(|(x, y)| {
                 Rectangle::new([(x, y - 6), (x + 18, y + 6)], PRED_BLUE.mix(0.2).filled())
             });
-            c.draw_series(LineSeries::new(
+            c.draw_series(segments(
                 ts.iter().copied().zip(m.iter().copied()),
                 PRED_BLUE.stroke_width(2),
             ))?
             .label(MEAN)
             .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], PRED_BLUE.stroke_width(2)));
             if let Some((t, v)) = &initial {
-                c.draw_series(LineSeries::new(
+                c.draw_series(segments(
                     t.iter().copied().zip(v.iter().copied()),
                     GREY.stroke_width(1),
                 ))?
@@ -118,7 +120,7 @@ impl Figure for Policy<'_> {
                 .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], GREY.stroke_width(2)));
             }
             if let (Some((t, v)), Some(applied)) = (&last, applied) {
-                c.draw_series(LineSeries::new(
+                c.draw_series(segments(
                     t.iter().copied().zip(v.iter().copied()),
                     RECORDED.stroke_width(2),
                 ))?

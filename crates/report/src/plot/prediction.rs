@@ -3,7 +3,7 @@
 //! one. A prediction far off the recording shows where the GP model was wrong.
 
 use super::{axis_label, band, chart, legend, panels, pretty, range, std_of};
-use super::{place_legend, Axes, DrawResult, Figure, Occupied, PRED_BLUE, RECORDED};
+use super::{place_legend, segments, Axes, DrawResult, Figure, Occupied, PRED_BLUE, RECORDED};
 use crate::data::{Prediction, Rollout};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -87,19 +87,18 @@ impl Figure for StatePrediction<'_> {
             .legend(|(x, y)| {
                 Rectangle::new([(x, y - 6), (x + 18, y + 6)], PRED_BLUE.mix(0.2).filled())
             });
-            c.draw_series(LineSeries::new(
+            c.draw_series(segments(
                 ts.iter().copied().zip(mean.iter().copied()),
                 PRED_BLUE.stroke_width(2),
             ))?
             .label(MEAN)
             .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], PRED_BLUE.stroke_width(2)));
             if let Some(recorded) = recorded {
-                c.draw_series(LineSeries::new(
-                    truth.iter().copied(),
-                    RECORDED.stroke_width(2),
-                ))?
-                .label(recorded)
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RECORDED.stroke_width(2)));
+                c.draw_series(segments(truth.iter().copied(), RECORDED.stroke_width(2)))?
+                    .label(recorded)
+                    .legend(|(x, y)| {
+                        PathElement::new([(x, y), (x + 18, y)], RECORDED.stroke_width(2))
+                    });
             }
             if let Some(pos) = pos {
                 legend(&mut c, pos)?;
@@ -181,19 +180,16 @@ impl Figure for CostPrediction<'_> {
         .legend(|(x, y)| {
             Rectangle::new([(x, y - 6), (x + 18, y + 6)], PRED_BLUE.mix(0.2).filled())
         });
-        c.draw_series(LineSeries::new(
+        c.draw_series(segments(
             ts.iter().copied().zip(mean.iter().copied()),
             PRED_BLUE.stroke_width(2),
         ))?
         .label(mean_label)
         .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], PRED_BLUE.stroke_width(2)));
         if let Some(rec_label) = rec_label {
-            c.draw_series(LineSeries::new(
-                rec.iter().copied(),
-                RECORDED.stroke_width(2),
-            ))?
-            .label(rec_label)
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RECORDED.stroke_width(2)));
+            c.draw_series(segments(rec.iter().copied(), RECORDED.stroke_width(2)))?
+                .label(rec_label)
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RECORDED.stroke_width(2)));
         }
         legend(&mut c, pos)
     }

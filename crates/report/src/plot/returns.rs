@@ -2,7 +2,7 @@
 //! markers coloured by how many roll-outs succeeded (thesis Figs 5-6, 5-7, 5-12).
 
 use super::{band, chart, legend, place_legend, range, Axes, DrawResult, Figure, Occupied};
-use super::{FAIL_RED, GREY, OK_GREEN, PRED_BLUE, RECORDED, SOME_YELLOW};
+use super::{segments, FAIL_RED, GREY, OK_GREEN, PRED_BLUE, RECORDED, SOME_YELLOW};
 use crate::data::{Colour, Episode};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -94,7 +94,7 @@ impl Figure for Returns<'_> {
                 PathElement::new([(x, m - s), (x, m + s)], PRED_BLUE.mix(0.5).stroke_width(8))
             }))?;
         }
-        c.draw_series(LineSeries::new(
+        c.draw_series(segments(
             eps.iter().map(|e| (e.index as f64, e.pred_mean)),
             PRED_BLUE.stroke_width(2),
         ))?
