@@ -3,6 +3,7 @@
 
 mod bench_cmd;
 mod oracle_cmd;
+mod report_cmd;
 mod run_cmd;
 mod sim_cmd;
 
@@ -51,6 +52,13 @@ enum Command {
     /// (per step), summary.json (inserted, final x, max |f|, wall time, real-time factor) and
     /// plot.png into DIR.
     Sim(sim_cmd::Args),
+    /// Plot a run directory and write a self-contained HTML report into it.
+    ///
+    /// Writes returns, policy, prediction_first/_last, cost_first/_last and, for arm runs,
+    /// paths and final_eval as PNG and SVG, and report.html (settings, per-update results, the
+    /// thesis comparison, totals, every plot inlined). Missing optional files or fields skip
+    /// a plot with a note instead of failing.
+    Report(report_cmd::Args),
 }
 
 fn main() -> ExitCode {
@@ -67,6 +75,7 @@ fn main() -> ExitCode {
         Command::Oracle(args) => oracle_cmd::run(args),
         Command::Bench(args) => bench_cmd::run(args).map(|()| ExitCode::SUCCESS),
         Command::Sim(args) => sim_cmd::run(args),
+        Command::Report(args) => report_cmd::run(args).map(|()| ExitCode::SUCCESS),
     };
     match result {
         Ok(code) => code,
