@@ -36,7 +36,9 @@ th, td { border: 1px solid #c8c8c8; padding: 3px 8px; text-align: left; vertical
 th { background: #e8eef5; }
 tbody tr:nth-child(even) { background: #f6f6f6; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
-table.settings td { white-space: pre-wrap; word-break: break-word; max-width: 760px; }
+div.columns { display: flex; gap: 1.5em; align-items: flex-start; }
+div.columns table { flex: 1 1 0; }
+table.settings td { white-space: pre-wrap; word-break: break-word; font-size: 13px; }
 table.settings td:first-child { font-family: "DejaVu Sans Mono", monospace; white-space: nowrap; }
 .swatch { display: inline-block; width: 13px; height: 13px; border: 1px solid #444;
           border-radius: 3px; vertical-align: -2px; margin-right: 5px; }
@@ -175,11 +177,23 @@ fn settings(h: &mut String, config: Option<&Value>) {
         h.push_str("<p>summary.json has no config.</p>\n");
         return;
     }
-    h.push_str("<table class=\"settings\">\n<thead><tr><th>setting</th><th>value</th></tr></thead>\n<tbody>\n");
-    for (k, v) in rows {
-        let _ = writeln!(h, "<tr><td>{}</td><td>{}</td></tr>", esc(&k), esc(&v));
+    // Arm configs have ~80 keys: two tables side by side keep the results within reach.
+    let half = if rows.len() > 20 {
+        rows.len().div_ceil(2)
+    } else {
+        rows.len()
+    };
+    h.push_str("<div class=\"columns\">\n");
+    for chunk in rows.chunks(half) {
+        h.push_str(
+            "<table class=\"settings\">\n<thead><tr><th>setting</th><th>value</th></tr></thead>\n<tbody>\n",
+        );
+        for (k, v) in chunk {
+            let _ = writeln!(h, "<tr><td>{}</td><td>{}</td></tr>", esc(k), esc(v));
+        }
+        h.push_str("</tbody></table>\n");
     }
-    h.push_str("</tbody></table>\n");
+    h.push_str("</div>\n");
 }
 
 fn episodes(h: &mut String, run: &Run) {

@@ -100,6 +100,11 @@ impl Figure for Returns<'_> {
         ))?
         .label(MEAN)
         .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], PRED_BLUE.stroke_width(2)));
+        // Dots mark the updates on the line, and are all there is of it with one update.
+        c.draw_series(
+            eps.iter()
+                .map(|e| Circle::new((e.index as f64, e.pred_mean), 3, PRED_BLUE.filled())),
+        )?;
 
         if let Some(r0) = self.initial_return {
             c.draw_series(DashedLineSeries::new(
