@@ -2,6 +2,7 @@
 //! what it wrote.
 
 use anyhow::Context;
+use std::io::Write;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -13,12 +14,17 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let files = vicpilco_report::write_report(&args.dir)
         .with_context(|| format!("writing the report of {}", args.dir.display()))?;
-    println!("{}", files.html.display());
+    let mut listing = format!("{}\n", files.html.display());
     for f in &files.images {
-        println!("{}", f.display());
+        listing.push_str(&format!("{}\n", f.display()));
     }
     for n in &files.notes {
-        println!("not shown: {n}");
+        listing.push_str(&format!("not shown: {n}\n"));
     }
-    Ok(())
+    // `println!` panics when the reader has gone (`vicpilco report DIR | head`); the report is
+    // written by then, so a closed pipe is not an error.
+    match std::io::stdout().lock().write_all(listing.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e).context("printing"),
+        _ => Ok(()),
+    }
 }
