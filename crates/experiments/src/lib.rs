@@ -10,7 +10,8 @@
 //! * `predictions.jsonl` — every update's long-term prediction (means, variances, costs);
 //! * `checkpoint.json` — what `--resume` needs to continue bit for bit;
 //! * `policy.json` — the final policy parameters and dynamics hyper-parameters;
-//! * `final_eval.jsonl` — runs with evaluation starts: the final policy from fresh starts.
+//! * `final_eval.jsonl` — runs with evaluation starts: the final policy from fresh starts;
+//! * `report.html` and its plots (PNG, SVG) — [`vicpilco_report`], rewritten after every update.
 //!
 //! Experiments: `pendulum` and `cartpole` (PILCO's swing-ups, [`classic`]), and the thesis's
 //! peg-in-hole runs configured by `experiments/*.toml` ([`config`], [`arm`]).
@@ -56,6 +57,8 @@ pub enum ExperimentError {
     },
     #[error("cannot resume from {path}: {message}")]
     Resume { path: PathBuf, message: String },
+    #[error(transparent)]
+    Report(#[from] vicpilco_report::ReportError),
 }
 
 /// The classic benchmarks (configured in code from PILCO's published scenarios).
@@ -264,6 +267,7 @@ fn run_arm(
     };
     summary.thesis_reference = checks::thesis_checks(name, &cfg, planned, &summary);
     summary.write(&opts.out)?;
+    vicpilco_report::write_report(&opts.out)?;
     Ok(summary)
 }
 
@@ -349,5 +353,6 @@ where
         "dynamics_hyp": outcome.dynamics_hyp,
     });
     write_json_atomic(&opts.out.join("policy.json"), &policy)?;
+    vicpilco_report::write_report(&opts.out)?;
     Ok((summary, outcome))
 }

@@ -3,7 +3,7 @@
 //! * every roll-out is appended to `rollouts.jsonl` when it is recorded, with its weighted
 //!   cost per step;
 //! * every update's long-term prediction is appended to `predictions.jsonl`;
-//! * `summary.json` is rewritten after every update;
+//! * `summary.json` is rewritten after every update, and the plots and `report.html` with it;
 //! * `checkpoint.json` after the initial roll-outs and after every update: the loop state
 //!   ([`LoopState`]: data, hyper-parameters, inducing inputs, policy, records), the summary so
 //!   far and the config it belongs to. Every random stream is derived from the master seed and
@@ -307,6 +307,11 @@ impl LoopObserver for Recorder<'_> {
         self.summary.solved_at_episode = solved_at(&self.summary.episodes);
         self.summary.wall_s = self.wall_s();
         let result = self.summary.write(&self.dir).map_err(ExperimentError::from);
+        self.keep(result);
+        // The report follows the run, so a long run can be watched in a browser.
+        let result = vicpilco_report::write_report(&self.dir)
+            .map(|_| ())
+            .map_err(Into::into);
         self.keep(result);
         self.inner.episode_done(record)
     }

@@ -136,7 +136,18 @@ fn vil_gic_quick_run_writes_every_file_and_resumes_bit_for_bit() {
     assert_eq!(summary.n_params, 68);
     assert!(summary.initial_return.is_some() && summary.constant_gain_return.is_some());
     assert!(!summary.thesis_reference.is_empty());
-    for file in ["summary.json", "checkpoint.json", "policy.json"] {
+    for file in [
+        "summary.json",
+        "checkpoint.json",
+        "policy.json",
+        "report.html",
+        "returns.png",
+        "returns.svg",
+        "policy.png",
+        "prediction_last.png",
+        "cost_last.png",
+        "paths.png",
+    ] {
         assert!(full.join(file).is_file(), "{file} missing");
     }
     assert_eq!(read(&full.join("rollouts.jsonl")).lines().count(), 4);
