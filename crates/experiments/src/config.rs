@@ -432,6 +432,30 @@ impl ArmExperiment {
         }
     }
 
+    /// Keys whose values are ours rather than the thesis's (they are marked "ours" in the TOML
+    /// files too; the simulator's own choices are listed in crates/env/README.md).
+    pub fn ours_keys(&self) -> Vec<&'static str> {
+        let mut keys = vec![
+            "optimiser.memory",
+            "policy.init_std",
+            "start.prediction_std",
+            "initial.ou_theta",
+        ];
+        if self.policy.kind == PolicyKind::Rbf {
+            keys.push("policy.lengthscales");
+        }
+        if self.controller == ControllerKind::Sic && self.policy.kind == PolicyKind::Rbf {
+            keys.push("policy.n_basis");
+        }
+        if self.task == Task::Vilta {
+            keys.extend(["episodes", "start.state", "initial.scan"]);
+            if self.start.prediction_y.is_some() {
+                keys.push("start.prediction_y");
+            }
+        }
+        keys
+    }
+
     /// Actions: (k_x, k_y) or (k_x, k_y, Δx_ref, Δy_ref).
     pub fn n_actions(&self) -> usize {
         match self.task {

@@ -236,6 +236,7 @@ fn run_arm(
         "end_x": g.end_x(),
         "spring_catch_x": g.spring_catch_x(),
     });
+    config["ours"] = serde_json::json!(cfg.ours_keys());
     if let Some(r) = cfg.start.y_range {
         config["start_y_range"] = serde_json::json!(r);
     }
