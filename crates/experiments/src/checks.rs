@@ -5,7 +5,6 @@
 use crate::config::{ArmExperiment, PolicyKind, Task};
 use crate::summary::{FinalEval, Summary, ThesisCheck};
 use crate::{arm, ExperimentError, RunOptions};
-use vicpilco_env::Environment;
 use vicpilco_learn::data::Rollout;
 use vicpilco_learn::outer::{derive_seed, rollout, LoopOutcome};
 use vicpilco_pilco::policy::Policy;
@@ -68,13 +67,11 @@ where
             fraction: successes as f64 / n_eval as f64,
         });
     }
-    let last = outcome.rollouts.iter().rev().find(|r| r.used_for_training);
-    summary.final_gains = last.map(|r| gains_first_last(r, env.dt()));
     Ok(summary)
 }
 
 /// Mean (k_x, k_y) over the first and the last [`GAIN_WINDOW_S`] seconds of a roll-out.
-fn gains_first_last(r: &Rollout, dt: f64) -> [[f64; 2]; 2] {
+pub fn gains_first_last(r: &Rollout, dt: f64) -> [[f64; 2]; 2] {
     let n = ((GAIN_WINDOW_S / dt).round() as usize).clamp(1, r.len().max(1));
     let mean = |acts: &[Vec<f64>]| -> [f64; 2] {
         let c = acts.len().max(1) as f64;

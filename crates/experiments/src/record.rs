@@ -297,6 +297,9 @@ impl LoopObserver for Recorder<'_> {
             (Some(f), Some(r)) => Some(f(r)),
             _ => None,
         };
+        if let (Some(_), Some(r)) = (self.extras, &self.current) {
+            self.summary.final_gains = Some(crate::checks::gains_first_last(r, self.dt));
+        }
         self.summary.episodes.push(EpisodeSummary {
             record: record.clone(),
             colour: colour(record.success_fraction).to_string(),
