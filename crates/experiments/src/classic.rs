@@ -155,7 +155,7 @@ where
         optimiser: OptimiserOptions {
             length: scn.opt_length as u64,
             mfepls: scn.opt_mfepls as u64,
-            memory: 10,
+            memory: scn.opt_memory,
             wolfe: Wolfe::PILCO,
         },
         initial_rollouts: scn.initial_rollouts,

@@ -172,6 +172,9 @@ pub struct Scenario<P> {
     pub opt_length: usize,
     /// Maximum number of function evaluations per line search (PILCO `opt.MFEPLS`).
     pub opt_mfepls: usize,
+    /// Correction pairs of the L-BFGS policy optimiser. **Ours**: PILCO optimises with full
+    /// BFGS; 10 is the usual L-BFGS memory.
+    pub opt_memory: usize,
     /// Number of policy updates, i.e. learning episodes after the random ones (PILCO `N`).
     pub policy_updates: usize,
     /// Number of initial roll-outs with the random policy (PILCO `J`): each action drawn

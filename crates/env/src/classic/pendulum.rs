@@ -42,6 +42,7 @@
 //! | cost Q | ℓ² on the (sin θ, cos θ) block | loss |
 //! | discount, exploration | 1, 0 | set `cost.gamma`, `cost.expl` |
 //! | optimiser budget | 75 line searches, 30 evaluations each | set `opt.length`, `opt.MFEPLS` |
+//! | policy optimiser | L-BFGS, 10 correction pairs, Wolfe constants of `minimize.m` (RHO 0.05, SIG 0.1) | **ours** (PILCO: BFGS with `minimize.m`'s line search) |
 //! | policy updates N | 10 | set `N` |
 //! | random roll-outs J | 1, uniform actions in ±maxU | set `J`, learn, `rollout.m` |
 //! | start distributions K | 1 | set `K` |
@@ -171,6 +172,7 @@ impl Default for Scenario<PendulumPhysics> {
             exploration: 0.0,
             opt_length: 75,
             opt_mfepls: 30,
+            opt_memory: 10,
             policy_updates: 10,
             initial_rollouts: 1,
             start_distributions: 1,
