@@ -308,6 +308,33 @@ where
 }
 
 /// The closed outline between `lo` and `hi` over `xs`, for a filled uncertainty band.
+/// The prediction every plot shows: the band `lo..hi` over `ts` labelled `band_label`, and the
+/// mean labelled `mean_label`, both in the prediction blue, with their legend entries.
+pub(crate) fn draw_prediction<'a, DB: DrawingBackend + 'a>(
+    c: &mut ChartContext<'a, DB, Cart>,
+    ts: &[f64],
+    (lo, hi): (&[f64], &[f64]),
+    mean: &[f64],
+    (band_label, mean_label): (&str, String),
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    c.draw_series(std::iter::once(Polygon::new(
+        band(ts, lo, hi),
+        PRED_BLUE.mix(0.2).filled(),
+    )))?
+    .label(band_label)
+    .legend(|(x, y)| Rectangle::new([(x, y - 6), (x + 18, y + 6)], PRED_BLUE.mix(0.2).filled()));
+    c.draw_series(segments(
+        ts.iter().copied().zip(mean.iter().copied()),
+        PRED_BLUE.stroke_width(2),
+    ))?
+    .label(mean_label)
+    .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], PRED_BLUE.stroke_width(2)));
+    Ok(())
+}
+
 pub(crate) fn band(xs: &[f64], lo: &[f64], hi: &[f64]) -> Vec<(f64, f64)> {
     let upper = xs.iter().zip(hi).map(|(&x, &y)| (x, y));
     let lower = xs.iter().zip(lo).rev().map(|(&x, &y)| (x, y));

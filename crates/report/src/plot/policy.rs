@@ -2,10 +2,8 @@
 //! ± 2σ) of the last policy update against the actions actually applied in that update's
 //! roll-out and in the initial exploration roll-out (thesis Figs 5-6, 5-12, right).
 
-use super::{axis_label, band, chart, legend, panels, pretty, range, stairs, std_of};
-use super::{
-    place_legend, segments, Axes, DrawResult, Figure, Occupied, GREY, PRED_BLUE, RECORDED,
-};
+use super::{axis_label, chart, draw_prediction, legend, panels, pretty, range, stairs, std_of};
+use super::{place_legend, segments, Axes, DrawResult, Figure, Occupied, GREY, RECORDED};
 use crate::data::{Prediction, Rollout};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -97,20 +95,7 @@ impl Figure for Policy<'_> {
                 place_legend(&occ, &mut axes, area.dim_in_pixel(), &labels)
             });
             let mut c = chart(area, &axes)?;
-            c.draw_series(std::iter::once(Polygon::new(
-                band(&ts, &lo, &hi),
-                PRED_BLUE.mix(0.2).filled(),
-            )))?
-            .label(BAND)
-            .legend(|(x, y)| {
-                Rectangle::new([(x, y - 6), (x + 18, y + 6)], PRED_BLUE.mix(0.2).filled())
-            });
-            c.draw_series(segments(
-                ts.iter().copied().zip(m.iter().copied()),
-                PRED_BLUE.stroke_width(2),
-            ))?
-            .label(MEAN)
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], PRED_BLUE.stroke_width(2)));
+            draw_prediction(&mut c, &ts, (&lo, &hi), &m, (BAND, MEAN.to_string()))?;
             if let Some((t, v)) = &initial {
                 c.draw_series(segments(
                     t.iter().copied().zip(v.iter().copied()),

@@ -2,8 +2,8 @@
 //! the same policy was rolled out, and (d) the predicted immediate cost against the recorded
 //! one. A prediction far off the recording shows where the GP model was wrong.
 
-use super::{axis_label, band, chart, legend, panels, pretty, range, std_of};
-use super::{place_legend, segments, Axes, DrawResult, Figure, Occupied, PRED_BLUE, RECORDED};
+use super::{axis_label, chart, draw_prediction, legend, panels, pretty, range, std_of};
+use super::{place_legend, segments, Axes, DrawResult, Figure, Occupied, RECORDED};
 use crate::data::{Prediction, Rollout};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -79,20 +79,7 @@ impl Figure for StatePrediction<'_> {
                 place_legend(&occ, &mut axes, area.dim_in_pixel(), &labels)
             });
             let mut c = chart(area, &axes)?;
-            c.draw_series(std::iter::once(Polygon::new(
-                band(&ts, &lo, &hi),
-                PRED_BLUE.mix(0.2).filled(),
-            )))?
-            .label(BAND)
-            .legend(|(x, y)| {
-                Rectangle::new([(x, y - 6), (x + 18, y + 6)], PRED_BLUE.mix(0.2).filled())
-            });
-            c.draw_series(segments(
-                ts.iter().copied().zip(mean.iter().copied()),
-                PRED_BLUE.stroke_width(2),
-            ))?
-            .label(MEAN)
-            .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], PRED_BLUE.stroke_width(2)));
+            draw_prediction(&mut c, &ts, (&lo, &hi), &mean, (BAND, MEAN.to_string()))?;
             if let Some(recorded) = recorded {
                 c.draw_series(segments(truth.iter().copied(), RECORDED.stroke_width(2)))?
                     .label(recorded)
@@ -172,20 +159,7 @@ impl Figure for CostPrediction<'_> {
         labels.extend(rec_label.clone());
         let pos = place_legend(&occ, &mut axes, root.dim_in_pixel(), &labels);
         let mut c = chart(root, &axes)?;
-        c.draw_series(std::iter::once(Polygon::new(
-            band(&ts, &lo, &hi),
-            PRED_BLUE.mix(0.2).filled(),
-        )))?
-        .label(BAND)
-        .legend(|(x, y)| {
-            Rectangle::new([(x, y - 6), (x + 18, y + 6)], PRED_BLUE.mix(0.2).filled())
-        });
-        c.draw_series(segments(
-            ts.iter().copied().zip(mean.iter().copied()),
-            PRED_BLUE.stroke_width(2),
-        ))?
-        .label(mean_label)
-        .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], PRED_BLUE.stroke_width(2)));
+        draw_prediction(&mut c, &ts, (&lo, &hi), &mean, (BAND, mean_label))?;
         if let Some(rec_label) = rec_label {
             c.draw_series(segments(rec.iter().copied(), RECORDED.stroke_width(2)))?
                 .label(rec_label)
