@@ -194,7 +194,9 @@ where
         n_params: setup.policy.n_free_params(),
         extras: None,
     };
-    Ok(finish(name, opts, setup, &mut env, observer, meta)?.0)
+    let summary = finish(name, opts, setup, &mut env, observer, meta)?.0;
+    vicpilco_report::write_report(&opts.out)?;
+    Ok(summary)
 }
 
 /// (final x, largest |f|, start y) of an arm roll-out.
@@ -354,6 +356,5 @@ where
         "dynamics_hyp": outcome.dynamics_hyp,
     });
     write_json_atomic(&opts.out.join("policy.json"), &policy)?;
-    vicpilco_report::write_report(&opts.out)?;
     Ok((summary, outcome))
 }

@@ -503,6 +503,14 @@ pub(crate) fn gradient(i: usize, n: usize) -> RGBColor {
     RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
 }
 
+/// Pixel size of the grid [`panels`] lays out: `n` panels of height `panel_height`, two per
+/// row when there is more than one.
+pub(crate) fn grid_size(n: usize, panel_height: u32) -> (u32, u32) {
+    let n = n.max(1);
+    let w = if n > 1 { 1400 } else { 1000 };
+    (w, panel_height * n.div_ceil(2) as u32)
+}
+
 /// Splits `root` into a grid of `n` panels, two per row when there is more than one.
 pub(crate) fn panels<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,

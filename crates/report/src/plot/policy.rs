@@ -2,7 +2,9 @@
 //! ± 2σ) of the last policy update against the actions actually applied in that update's
 //! roll-out and in the initial exploration roll-out (thesis Figs 5-6, 5-12, right).
 
-use super::{axis_label, chart, draw_prediction, legend, panels, pretty, range, stairs, std_of};
+use super::{
+    axis_label, chart, draw_prediction, grid_size, legend, panels, pretty, range, stairs, std_of,
+};
 use super::{place_legend, segments, Axes, DrawResult, Figure, Occupied, GREY, RECORDED};
 use crate::data::{Prediction, Rollout};
 use plotters::coord::Shift;
@@ -26,9 +28,7 @@ fn recorded(r: &Rollout, j: usize, dt: f64) -> Option<(Vec<f64>, Vec<f64>)> {
 
 impl Figure for Policy<'_> {
     fn size(&self) -> (u32, u32) {
-        let n = self.pred.action_names.len().max(1);
-        let w = if n > 1 { 1400 } else { 1000 };
-        (w, 480 * n.div_ceil(2) as u32)
+        grid_size(self.pred.action_names.len(), 480)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult

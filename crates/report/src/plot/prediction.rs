@@ -2,7 +2,7 @@
 //! the same policy was rolled out, and (d) the predicted immediate cost against the recorded
 //! one. A prediction far off the recording shows where the GP model was wrong.
 
-use super::{axis_label, chart, draw_prediction, legend, panels, pretty, range, std_of};
+use super::{axis_label, chart, draw_prediction, grid_size, legend, panels, pretty, range, std_of};
 use super::{place_legend, segments, Axes, DrawResult, Figure, Occupied, RECORDED};
 use crate::data::{Prediction, Rollout};
 use plotters::coord::Shift;
@@ -18,9 +18,7 @@ pub(crate) struct StatePrediction<'a> {
 
 impl Figure for StatePrediction<'_> {
     fn size(&self) -> (u32, u32) {
-        let n = self.pred.state_names.len().max(1);
-        let w = if n > 1 { 1400 } else { 1000 };
-        (w, 400 * n.div_ceil(2) as u32)
+        grid_size(self.pred.state_names.len(), 400)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
