@@ -338,6 +338,9 @@ pub fn setup<P>(
             sparse: SparseTrainOptions {
                 num_inducing: cfg.gp.n_inducing,
                 seed,
+                // Ours: with up to 2600 points, hyper-parameters on all of them would cost
+                // O(N³) per evaluation; they are fitted on a random subset of N_ii points.
+                hyper_points: Some(cfg.gp.n_inducing),
                 ..SparseTrainOptions::default()
             },
         },

@@ -132,8 +132,12 @@ where
             num_inducing: scn.sparse_inducing,
             seed,
             hyper: TrainOptions::default(),
+            // pilco-matlab's train.m fits the hyper-parameters on every point (≤ 640 here).
+            hyper_points: None,
             inducing: InducingOptions {
                 max_iters: scn.gp_train_sparse as u64,
+                // pilco-matlab's train.m triples the budget of the first sparse fit.
+                cold_start_factor: 3,
                 ..InducingOptions::default()
             },
         },

@@ -53,6 +53,7 @@
 //! | start distributions K | 1 | set `K` |
 //! | GP training | 300 line searches (full), 500 (sparse) | set `trainOpt` |
 //! | sparse GP | 300 inducing inputs, used above 300 points | set `dynmodel.induce`, `train.m` |
+//! | sparse GP hyper-parameters | fitted on all points, then the inducing inputs with them fixed | `train.m` |
 //! | success test | last 10 states: tip ≤ 0.1 m from target (no limit on θ̇) | **ours** |
 //!
 //! With the target augmented to (0, 0, 0, π, 0, −1), `(a − a*)ᵀ Q (a − a*)` =

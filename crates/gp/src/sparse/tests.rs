@@ -280,6 +280,51 @@ fn dynamics_model_switches_to_sparse_above_the_threshold() {
 }
 
 #[test]
+fn hyper_parameters_are_fitted_on_all_points_or_on_the_requested_subset() {
+    let mut rng = ChaCha8Rng::seed_from_u64(27);
+    let (n, d, m) = (50, 2, 8);
+    let x = normal_mat(n, d, &mut rng);
+    let y = smooth(&x, 1, &mut rng);
+    let init = vec![hyp_for(&x, &mut rng)];
+    let hyper = crate::TrainOptions {
+        max_iters: 20,
+        ..Default::default()
+    };
+    let mut opts = SparseTrainOptions {
+        num_inducing: m,
+        seed: 5,
+        hyper: hyper.clone(),
+        hyper_points: None,
+        inducing: InducingOptions {
+            max_iters: 2,
+            ..Default::default()
+        },
+    };
+    let (all, rep) = train_sparse(x.as_ref(), y.as_ref(), &init, None, &opts).unwrap();
+    assert_eq!(rep.hyper_points, n);
+    let (expect, _) = crate::train::train(x.as_ref(), y.as_ref(), &init, &hyper).unwrap();
+    assert_eq!(all.hyp(), &expect[..]);
+
+    opts.hyper_points = Some(20);
+    let (sub, rep) = train_sparse(x.as_ref(), y.as_ref(), &init, None, &opts).unwrap();
+    assert_eq!(rep.hyper_points, 20);
+    let rows = select_subset(n, 20, 5);
+    let xs = Mat::from_fn(20, d, |i, c| x[(rows[i], c)]);
+    let ys = Mat::from_fn(20, 1, |i, _| y[(rows[i], 0)]);
+    let (expect, _) = crate::train::train(xs.as_ref(), ys.as_ref(), &init, &hyper).unwrap();
+    assert_eq!(sub.hyp(), &expect[..]);
+    assert_ne!(sub.hyp(), all.hyp());
+
+    // A cold start (no previous inducing inputs) gets `cold_start_factor` times the budget.
+    opts.inducing.cold_start_factor = 3;
+    let (cold, rep) = train_sparse(x.as_ref(), y.as_ref(), &init, None, &opts).unwrap();
+    let cold_iters = rep.inducing.unwrap().iterations;
+    assert!(cold_iters > 2 && cold_iters <= 6, "{cold_iters}");
+    let (_, rep) = train_sparse(x.as_ref(), y.as_ref(), &init, Some(cold.inputs()), &opts).unwrap();
+    assert!(rep.inducing.unwrap().iterations <= 2);
+}
+
+#[test]
 fn bad_inducing_inputs_are_rejected_with_their_position() {
     let mut rng = ChaCha8Rng::seed_from_u64(27);
     let x = normal_mat(10, 2, &mut rng);

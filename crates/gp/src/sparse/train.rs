@@ -1,8 +1,9 @@
 //! Training the sparse GP (PILCO's `train.m` when `gpmodel.induce` exists, with `fitc.m`).
 //!
 //! 1. Hyper-parameters: the full GP trained ([`crate::train::train`], with the penalty when
-//!    it is on) on M training points chosen by [`select_subset`] — pilco-matlab trains them on
-//!    all N points, which costs O(N³) per evaluation; the subset keeps it O(M³).
+//!    it is on) on all N training points, as pilco-matlab does, or — when
+//!    [`SparseTrainOptions::hyper_points`] asks for it — on a subset of that many points chosen
+//!    by [`select_subset`]. All N costs O(N³) per evaluation; the subset keeps it O(M³).
 //! 2. Inducing inputs: start from the given ones (warm start) or from the same subset of the
 //!    training inputs (pilco-matlab: a random subset), then minimise
 //!    `Σ_e nlml_FITC,e(U)` over U (M×D, shared by all outputs) with the hyper-parameters fixed,
@@ -36,6 +37,10 @@ pub struct InducingOptions {
     pub rel_tol: f64,
     /// L-BFGS memory (default 10).
     pub memory: usize,
+    /// [`train_sparse`] multiplies `max_iters` by this when the inducing inputs start from a
+    /// subset of the data rather than from a previous fit (pilco-matlab's `train.m` triples its
+    /// budget then: the first fit has furthest to go). Default 1.
+    pub cold_start_factor: u64,
 }
 
 impl Default for InducingOptions {
@@ -45,6 +50,7 @@ impl Default for InducingOptions {
             grad_tol: 1e-6,
             rel_tol: 1e-6,
             memory: 10,
+            cold_start_factor: 1,
         }
     }
 }
@@ -56,8 +62,12 @@ pub struct SparseTrainOptions {
     pub num_inducing: usize,
     /// Seed of the subset selection ([`select_subset`]).
     pub seed: u64,
-    /// Hyper-parameter training on the subset.
+    /// Hyper-parameter training.
     pub hyper: TrainOptions,
+    /// Train the hyper-parameters on a random subset of at most this many points
+    /// ([`select_subset`]); `None`: on all N points, as pilco-matlab. Default `Some(300)`:
+    /// affordable for the thousands of points of the arm experiments.
+    pub hyper_points: Option<usize>,
     /// Inducing-input optimisation.
     pub inducing: InducingOptions,
 }
@@ -68,6 +78,7 @@ impl Default for SparseTrainOptions {
             num_inducing: 300,
             seed: 0,
             hyper: TrainOptions::default(),
+            hyper_points: Some(300),
             inducing: InducingOptions::default(),
         }
     }
@@ -90,9 +101,10 @@ pub struct InducingReport {
 /// What [`train_sparse`] did.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SparseTrainReport {
-    /// Rows of the training data the hyper-parameters were trained on (and, without a warm
-    /// start, the initial inducing inputs).
+    /// Rows of the training data that gave the initial inducing inputs (without a warm start).
     pub subset: Vec<usize>,
+    /// Number of training points the hyper-parameters were trained on.
+    pub hyper_points: usize,
     pub hyper: TrainReport,
     /// `None` when N ≤ M (the inducing inputs are then the training inputs, not optimised).
     pub inducing: Option<InducingReport>,
@@ -227,7 +239,7 @@ pub fn train_inducing(
     ))
 }
 
-/// PILCO's sparse training pipeline (module docs): hyper-parameters on a subset, then the
+/// PILCO's sparse training pipeline (module docs): hyper-parameters, then the
 /// inducing inputs, then the [`SparseGpModel`]. When N ≤ M every training input is an inducing
 /// input and nothing is optimised beyond the hyper-parameters.
 pub fn train_sparse(
@@ -242,30 +254,51 @@ pub fn train_sparse(
     let n = inputs.nrows();
     let subset = select_subset(n, opts.num_inducing.max(1), opts.seed);
     let xs = rows(inputs, &subset);
-    let ys = rows(targets, &subset);
-    let (hyp, hyper) = train(xs.as_ref(), ys.as_ref(), init_hyp, &opts.hyper)?;
+    let hyper_rows = match opts.hyper_points {
+        Some(k) if k < n => Some(select_subset(n, k.max(1), opts.seed)),
+        _ => None,
+    };
+    let (hyp, hyper) = match &hyper_rows {
+        Some(r) => train(
+            rows(inputs, r).as_ref(),
+            rows(targets, r).as_ref(),
+            init_hyp,
+            &opts.hyper,
+        )?,
+        None => train(inputs, targets, init_hyp, &opts.hyper)?,
+    };
     let (u, inducing) = if subset.len() >= n {
         (inputs.to_owned(), None)
     } else {
-        let init = match init_inducing {
-            Some(u0) if u0.nrows() == subset.len() && u0.ncols() == inputs.ncols() => u0.to_owned(),
+        let warm = match init_inducing {
+            Some(u0) if u0.nrows() == subset.len() && u0.ncols() == inputs.ncols() => {
+                Some(u0.to_owned())
+            }
             Some(u0) => {
                 tracing::warn!(
                     given = ?(u0.nrows(), u0.ncols()),
                     wanted = ?(subset.len(), inputs.ncols()),
                     "warm-start inducing inputs have the wrong shape; starting from the subset"
                 );
-                xs
+                None
             }
-            None => xs,
+            None => None,
         };
-        let (u, rep) = train_inducing(inputs, targets, &hyp, init.as_ref(), &opts.inducing)?;
+        let mut iopts = opts.inducing;
+        if warm.is_none() {
+            iopts.max_iters = iopts
+                .max_iters
+                .saturating_mul(iopts.cold_start_factor.max(1));
+        }
+        let init = warm.unwrap_or(xs);
+        let (u, rep) = train_inducing(inputs, targets, &hyp, init.as_ref(), &iopts)?;
         (u, Some(rep))
     };
     let model = SparseGpModel::new(inputs, targets, hyp, u)?;
     Ok((
         model,
         SparseTrainReport {
+            hyper_points: hyper_rows.as_ref().map_or(n, Vec::len),
             subset,
             hyper,
             inducing,
