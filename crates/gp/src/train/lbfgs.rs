@@ -106,7 +106,9 @@ struct Memo<'f, F> {
     f: RefCell<&'f mut F>,
     scale: f64,
     last: RefCell<Option<Point>>,
-    evals: Cell<usize>,
+    /// Owned by [`minimize`], not by the memo: when a line search fails, argmin's L-BFGS drops
+    /// the problem, and a count kept inside it was lost with it.
+    evals: &'f Cell<usize>,
 }
 
 impl<F: FnMut(&[f64]) -> Option<(f64, Vec<f64>)>> Memo<'_, F> {
@@ -279,6 +281,7 @@ where
     let mut evaluations = 1;
     let mut iterations = 0u64;
     let mut step_shrink = 1.0;
+    let memo_evals = Cell::new(0usize);
     let mut gnorm = grad.iter().map(|v| v * v).sum::<f64>().sqrt();
     if gnorm <= opts.grad_tol {
         return Some(MinimizeResult {
@@ -301,7 +304,7 @@ where
             f: RefCell::new(&mut *f),
             scale,
             last: RefCell::new(Some(seed)),
-            evals: Cell::new(0),
+            evals: &memo_evals,
         };
         let linesearch = BoundedLineSearch {
             inner: MoreThuenteLineSearch::new()
@@ -327,21 +330,21 @@ where
             .configure(|s| s.param(start).max_iters(remaining))
             .ctrlc(false)
             .run();
-        let (mut state, solver, memo) = match run {
-            Ok(r) => (r.state, r.solver, r.problem.problem),
+        let (mut state, solver) = match run {
+            Ok(r) => (r.state, r.solver),
             // argmin errors outside the line search (should not happen): keep the best point.
             Err(e) => {
                 return Some(MinimizeResult {
                     x: best_x,
                     value: best_f,
                     iterations,
-                    evaluations,
+                    evaluations: evaluations + memo_evals.get(),
                     termination: Termination::LineSearchFailed(e.to_string()),
                 })
             }
         };
         iterations += state.get_iter();
-        evaluations += memo.as_ref().map_or(0, |m| m.evals.get());
+        evaluations += memo_evals.take();
         let run_best = state.get_best_cost() / scale;
         if let Some(x) = state.take_best_param() {
             if run_best < best_f {
@@ -477,6 +480,70 @@ mod tests {
         };
         let r = minimize(&mut f, vec![-10.0], &opts).unwrap();
         assert!((r.x[0] - 3.0).abs() < 1e-6, "{r:?}");
+    }
+
+    #[test]
+    fn evaluations_count_every_call_of_the_objective() {
+        let calls = Cell::new(0usize);
+        // Budget-bound runs with bounded line searches (the policy optimiser's setting) and a
+        // run through failed regions and restarts.
+        let mut counted = |x: &[f64]| {
+            calls.set(calls.get() + 1);
+            rosenbrock(x)
+        };
+        for (max_iters, evals) in [(5, Some(2)), (30, Some(25)), (200, None)] {
+            calls.set(0);
+            let opts = MinimizeOptions {
+                max_iters,
+                grad_tol: 1e-10,
+                rel_tol: 0.0,
+                memory: 10,
+                max_line_search_evals: evals,
+                wolfe: Wolfe::PILCO,
+            };
+            let r = minimize(&mut counted, vec![-1.2, 1.0], &opts).unwrap();
+            assert_eq!(r.evaluations, calls.get(), "{r:?}");
+            assert!(r.evaluations > r.iterations as usize, "{r:?}");
+        }
+        let calls = Cell::new(0usize);
+        let mut f = |x: &[f64]| {
+            calls.set(calls.get() + 1);
+            (x[0] <= 4.0).then(|| (1000.0 * (x[0] - 3.0).powi(2), vec![2000.0 * (x[0] - 3.0)]))
+        };
+        let opts = MinimizeOptions {
+            max_iters: 100,
+            grad_tol: 1e-8,
+            rel_tol: 0.0,
+            memory: 5,
+            max_line_search_evals: None,
+            wolfe: Wolfe::LOOSE,
+        };
+        let r = minimize(&mut f, vec![-10.0], &opts).unwrap();
+        assert_eq!(r.evaluations, calls.get(), "{r:?}");
+
+        // Rosenbrock undefined right of a wall the path runs into: line searches fail inside
+        // argmin, which then drops the problem (and once, its evaluation count, with it).
+        for wall in [-1.0, 0.0, 0.9] {
+            let calls = Cell::new(0usize);
+            let mut f = |x: &[f64]| {
+                calls.set(calls.get() + 1);
+                (x[0] <= wall).then(|| rosenbrock(x)).flatten()
+            };
+            let opts = MinimizeOptions {
+                max_iters: 50,
+                grad_tol: 1e-12,
+                rel_tol: 0.0,
+                memory: 10,
+                max_line_search_evals: Some(25),
+                wolfe: Wolfe::PILCO,
+            };
+            let r = minimize(&mut f, vec![-1.2, 1.0], &opts).unwrap();
+            assert!(
+                matches!(r.termination, Termination::LineSearchFailed(_)),
+                "{r:?}"
+            );
+            assert_eq!(r.evaluations, calls.get(), "wall {wall}: {r:?}");
+        }
     }
 
     #[test]
