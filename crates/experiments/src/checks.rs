@@ -40,6 +40,7 @@ where
             |_, _| Ok(vec![CONSTANT_GAIN, CONSTANT_GAIN]),
         )?;
         summary.constant_gain_return = Some(setup.recorded_return(&r));
+        summary.constant_gain_inserted = Some(arm::inserted(&r));
     }
     let n_eval = cfg.vilta.as_ref().map_or(0, |v| v.evaluation_starts);
     if n_eval > 0 {
@@ -225,10 +226,15 @@ pub fn thesis_checks(
             "final return below the initial OU roll-out's and constant gains' (127.5 N/m)",
             "learning improves on the initial profiles",
             format!(
-                "{} vs {} and {}",
+                "{} vs {} and {}{}",
                 fmt_opt(final_return),
                 fmt_opt(bar[0]),
-                fmt_opt(bar[1])
+                fmt_opt(bar[1]),
+                match s.constant_gain_inserted {
+                    Some(true) => " (constant gains insert)",
+                    Some(false) => " (constant gains do not insert)",
+                    None => "",
+                }
             ),
             match (final_return, bar) {
                 (Some(f), [Some(a), Some(b)]) if full => Some(f < a && f < b),
@@ -347,6 +353,7 @@ mod tests {
             config: serde_json::Value::Null,
             thesis_reference: Vec::new(),
             constant_gain_return: Some(110.0),
+            constant_gain_inserted: None,
             final_eval: None,
             final_gains: None,
         }

@@ -314,6 +314,7 @@ where
             config: meta.config.clone(),
             thesis_reference: Vec::new(),
             constant_gain_return: None,
+            constant_gain_inserted: None,
             final_eval: None,
             final_gains: None,
         },

@@ -74,6 +74,9 @@ pub struct Summary {
     /// VIL runs: the recorded return of one roll-out with constant gains
     /// ([`crate::checks::CONSTANT_GAIN`]) on the same simulator.
     pub constant_gain_return: Option<f64>,
+    /// Whether that constant-gain roll-out inserted (the success test of the learning runs).
+    #[serde(default)]
+    pub constant_gain_inserted: Option<bool>,
     /// Runs with evaluation starts: the final policy from fresh starts.
     pub final_eval: Option<FinalEval>,
     /// Arm runs: mean (k_x, k_y) of the last learned roll-out over its first and its last
@@ -223,6 +226,7 @@ mod tests {
             config: serde_json::Value::Null,
             thesis_reference: Vec::new(),
             constant_gain_return: None,
+            constant_gain_inserted: None,
             final_eval: None,
             final_gains: None,
         };

@@ -135,6 +135,7 @@ fn vil_gic_quick_run_writes_every_file_and_resumes_bit_for_bit() {
     }
     assert_eq!(summary.n_params, 68);
     assert!(summary.initial_return.is_some() && summary.constant_gain_return.is_some());
+    assert!(summary.constant_gain_inserted.is_some());
     assert!(!summary.thesis_reference.is_empty());
     for file in [
         "summary.json",
