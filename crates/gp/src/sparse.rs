@@ -23,7 +23,7 @@ mod train;
 
 pub use fitc::{fitc_nlml, FitcEval, FITC_RIDGE};
 pub use train::{
-    select_subset, stable_subset, train_inducing, train_sparse, InducingOptions, InducingReport,
+    select_subset, train_inducing, train_sparse, InducingOptions, InducingReport,
     SparseTrainOptions, SparseTrainReport,
 };
 

@@ -218,26 +218,6 @@ fn subset_selection_is_deterministic_distinct_and_seeded() {
 }
 
 #[test]
-fn stable_subset_is_uniform_seeded_and_changes_little_as_data_grow() {
-    let a = stable_subset(1000, 300, 7);
-    assert_eq!(a.len(), 300);
-    assert!(a.windows(2).all(|w| w[0] < w[1]) && *a.last().unwrap() < 1000);
-    assert_ne!(a, stable_subset(1000, 300, 8));
-    assert_eq!(stable_subset(5, 10, 1), vec![0, 1, 2, 3, 4]);
-    // 100 more points: about 300·100/1100 ≈ 27 members replaced (a fresh draw keeps ~82).
-    let b = stable_subset(1100, 300, 7);
-    let kept = a.iter().filter(|i| b.binary_search(i).is_ok()).count();
-    assert!((255..=290).contains(&kept), "{kept}");
-    let fresh = select_subset(1100, 300, 1100);
-    let kept_fresh = a.iter().filter(|i| fresh.binary_search(i).is_ok()).count();
-    assert!(kept_fresh < 130, "{kept_fresh}");
-    // Uniform: about a third of each half of 0..2000 (m/n = 0.3).
-    let c = stable_subset(2000, 600, 3);
-    let low = c.iter().filter(|&&i| i < 1000).count();
-    assert!((250..=350).contains(&low), "{low}");
-}
-
-#[test]
 fn training_inducing_inputs_decreases_the_summed_fitc_nlml() {
     let mut rng = ChaCha8Rng::seed_from_u64(25);
     let (n, d, m) = (120, 2, 10);
@@ -328,7 +308,7 @@ fn hyper_parameters_are_fitted_on_all_points_or_on_the_requested_subset() {
     opts.hyper_points = Some(20);
     let (sub, rep) = train_sparse(x.as_ref(), y.as_ref(), &init, None, &opts).unwrap();
     assert_eq!(rep.hyper_points, 20);
-    let rows = stable_subset(n, 20, 5);
+    let rows = select_subset(n, 20, 5);
     let xs = Mat::from_fn(20, d, |i, c| x[(rows[i], c)]);
     let ys = Mat::from_fn(20, 1, |i, _| y[(rows[i], 0)]);
     let (expect, _) = crate::train::train(xs.as_ref(), ys.as_ref(), &init, &hyper).unwrap();

@@ -3,7 +3,7 @@
 //! 1. Hyper-parameters: the full GP trained ([`crate::train::train`], with the penalty when
 //!    it is on) on all N training points, as pilco-matlab does, or — when
 //!    [`SparseTrainOptions::hyper_points`] asks for it — on a subset of that many points chosen
-//!    by [`stable_subset`]. All N costs O(N³) per evaluation; the subset keeps it O(M³).
+//!    by [`select_subset`]. All N costs O(N³) per evaluation; the subset keeps it O(M³).
 //! 2. Inducing inputs: start from the given ones (warm start) or from the same subset of the
 //!    training inputs (pilco-matlab: a random subset), then minimise
 //!    `Σ_e nlml_FITC,e(U)` over U (M×D, shared by all outputs) with the hyper-parameters fixed,
@@ -65,8 +65,7 @@ pub struct SparseTrainOptions {
     /// Hyper-parameter training.
     pub hyper: TrainOptions,
     /// Train the hyper-parameters on a random subset of at most this many points
-    /// ([`stable_subset`]: it changes little from one fit to the next as data are added);
-    /// `None`: on all N points, as pilco-matlab. Default `Some(300)`:
+    /// ([`select_subset`]); `None`: on all N points, as pilco-matlab. Default `Some(300)`:
     /// affordable for the thousands of points of the arm experiments.
     pub hyper_points: Option<usize>,
     /// Inducing-input optimisation.
@@ -134,27 +133,6 @@ pub fn select_subset(n: usize, m: usize, seed: u64) -> Vec<usize> {
     let mut out = idx[..m].to_vec();
     out.sort_unstable();
     out
-}
-
-/// `m` of the indices `0..n`: those whose SplitMix64 key `hash(seed, i)` is among the `m`
-/// smallest, returned sorted. A uniform random subset like [`select_subset`], but stable as the
-/// data grow: adding points keeps every old member whose key still ranks, so a data set grown
-/// by k points changes the subset by about `m·k/n` members instead of redrawing it. Used for the
-/// hyper-parameter subset, so that successive fits see mostly the same points.
-pub fn stable_subset(n: usize, m: usize, seed: u64) -> Vec<usize> {
-    let key = |i: usize| {
-        let mut z = seed ^ (i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    };
-    let mut idx: Vec<usize> = (0..n).collect();
-    if m < n {
-        idx.select_nth_unstable_by_key(m, |&i| (key(i), i));
-        idx.truncate(m);
-    }
-    idx.sort_unstable();
-    idx
 }
 
 fn rows(x: MatRef<'_, f64>, idx: &[usize]) -> Mat<f64> {
@@ -277,7 +255,7 @@ pub fn train_sparse(
     let subset = select_subset(n, opts.num_inducing.max(1), opts.seed);
     let xs = rows(inputs, &subset);
     let hyper_rows = match opts.hyper_points {
-        Some(k) if k < n => Some(stable_subset(n, k.max(1), opts.seed)),
+        Some(k) if k < n => Some(select_subset(n, k.max(1), opts.seed)),
         _ => None,
     };
     let (hyp, hyper) = match &hyper_rows {
