@@ -333,6 +333,7 @@ pub fn setup<P>(
             sparse_threshold: cfg.gp.sparse_threshold,
             train: TrainOptions {
                 max_iters: cfg.gp.line_searches,
+                cold_restart: cfg.gp.cold_restart,
                 ..TrainOptions::default()
             },
             sparse: SparseTrainOptions {

@@ -162,6 +162,10 @@ pub struct GpConfig {
     pub n_inducing: usize,
     /// Line searches per hyper-parameter fit.
     pub line_searches: u64,
+    /// Also fit the hyper-parameters from PILCO's first guess on the current data and keep the
+    /// better fit per output (ours; PILCO only warm-starts from the previous fit, which kept
+    /// the arm's velocity model at a length-scale of the sensor noise, EXPERIMENTS.md).
+    pub cold_restart: bool,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -40,6 +40,7 @@ fn assert_vil_common(c: &ArmExperiment) {
         (c.gp.sparse_threshold, c.gp.n_inducing, c.gp.line_searches),
         (300, 300, 300)
     );
+    assert!(c.gp.cold_restart);
     assert_eq!(c.policy.k_min, 5.0);
     assert_eq!(c.cost.position_dims, ["x", "y"]);
     assert_eq!(c.cost.position_target, [0.75, 0.20]);

@@ -3,7 +3,6 @@
 use crate::step::{StepSpec, Target};
 use faer::Mat;
 use vicpilco_env::StepInfo;
-use vicpilco_gp::Hyper;
 use vicpilco_pilco::squash::TrigAug;
 
 /// One episode on the system.
@@ -84,30 +83,4 @@ pub fn training_set(
         Mat::from_fn(xs.len(), d, |i, j| xs[i][j]),
         Mat::from_fn(ys.len(), e, |i, j| ys[i][j]),
     )
-}
-
-/// PILCO's first guess of the dynamics hyper-parameters: length-scales = input standard
-/// deviations, signal std = target std, noise std = target std / 10.
-pub fn initial_hyper(inputs: &Mat<f64>, targets: &Mat<f64>) -> Vec<Hyper> {
-    let std = |m: &Mat<f64>, c: usize| -> f64 {
-        let n = m.nrows() as f64;
-        let mean = (0..m.nrows()).map(|i| m[(i, c)]).sum::<f64>() / n;
-        let var = (0..m.nrows())
-            .map(|i| (m[(i, c)] - mean).powi(2))
-            .sum::<f64>()
-            / (n - 1.0).max(1.0);
-        // A constant column (e.g. a saturated action) would give log 0.
-        var.sqrt().max(1e-6)
-    };
-    let log_ls: Vec<f64> = (0..inputs.ncols()).map(|c| std(inputs, c).ln()).collect();
-    (0..targets.ncols())
-        .map(|e| {
-            let sy = std(targets, e);
-            Hyper {
-                log_ls: log_ls.clone(),
-                log_sf: sy.ln(),
-                log_sn: (sy / 10.0).ln(),
-            }
-        })
-        .collect()
 }

@@ -5,7 +5,7 @@
 //! training, policy optimisation and roll-outs know nothing of them. Randomness is derived
 //! from the master seed per (episode, purpose), so an episode can be reproduced alone.
 
-use crate::data::{augment, initial_hyper, training_set, Rollout};
+use crate::data::{augment, training_set, Rollout};
 use crate::start::StartDistribution;
 use crate::step::{Predictor, StepSpec};
 use crate::value::{value, ReturnSpec, ValueOut};
@@ -14,6 +14,7 @@ use faer::Mat;
 use std::time::Instant;
 use vicpilco_env::Environment;
 use vicpilco_gp::moments::MmModel;
+use vicpilco_gp::train::initial_hyper;
 use vicpilco_gp::train::{minimize, MinimizeOptions, Termination, Wolfe};
 use vicpilco_gp::{DynamicsModel, DynamicsOptions, Hyper};
 use vicpilco_pilco::policy::Policy;
@@ -355,7 +356,7 @@ where
             let (inputs, targets) = training_set(&self.spec, &data, self.prior_shift.as_deref());
             let init = hyp
                 .clone()
-                .unwrap_or_else(|| initial_hyper(&inputs, &targets));
+                .unwrap_or_else(|| initial_hyper(inputs.as_ref(), targets.as_ref()));
             let n_train = inputs.nrows();
             let (model, _report) = DynamicsModel::fit(
                 inputs,

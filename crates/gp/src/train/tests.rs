@@ -105,14 +105,7 @@ fn penalised_gradient_matches_finite_differences_also_where_the_penalty_is_large
 }
 
 fn start(x: &Mat<f64>, y: &[f64]) -> Hyper {
-    // pilco-matlab's initialisation: log std of inputs, log std(y), log std(y)/10.
-    let c = input_std(x.as_ref());
-    let sy = input_std(Mat::from_fn(y.len(), 1, |i, _| y[i]).as_ref())[0];
-    Hyper {
-        log_ls: c.iter().map(|v| v.ln()).collect(),
-        log_sf: sy.ln(),
-        log_sn: (sy / 10.0).ln(),
-    }
+    initial_hyper(x.as_ref(), Mat::from_fn(y.len(), 1, |i, _| y[i]).as_ref()).remove(0)
 }
 
 #[test]
@@ -242,4 +235,56 @@ fn shape_errors_are_reported() {
         ),
         Err(GpError::Shape { .. })
     ));
+}
+
+#[test]
+fn cold_restart_keeps_the_better_of_the_warm_start_and_the_first_guess() {
+    let (x, y1) = data(80, 3, 9);
+    let y2 = smooth_targets(&x, 1, 9);
+    let targets = Mat::from_fn(80, 2, |i, e| if e == 0 { y1[i] } else { y2[i] });
+    // Output 0 starts on the white-noise plateau (length-scales far below the input spread,
+    // where the gradient vanishes); output 1 from a sensible start.
+    let plateau = Hyper {
+        log_ls: vec![(1e-4f64).ln(); 3],
+        log_sf: -3.0,
+        log_sn: 0.0,
+    };
+    let warm = vec![plateau, start(&x, &y2)];
+    let plain = TrainOptions::default();
+    let (h_warm, r_warm) = train(x.as_ref(), targets.as_ref(), &warm, &plain).unwrap();
+    let guess = initial_hyper(x.as_ref(), targets.as_ref());
+    let (h_cold, r_cold) = train(x.as_ref(), targets.as_ref(), &guess, &plain).unwrap();
+    let both = TrainOptions {
+        cold_restart: true,
+        ..plain
+    };
+    let (h, r) = train(x.as_ref(), targets.as_ref(), &warm, &both).unwrap();
+    for e in 0..2 {
+        let (w, c) = (r_warm.outputs[e].objective, r_cold.outputs[e].objective);
+        let picked_cold = c < w;
+        assert_eq!(r.outputs[e].from_cold_restart, picked_cold, "output {e}");
+        assert_eq!(r.outputs[e].objective, w.min(c), "output {e}");
+        assert_eq!(
+            h[e],
+            if picked_cold { &h_cold[e] } else { &h_warm[e] }.clone()
+        );
+    }
+    assert!(
+        r.outputs[0].from_cold_restart,
+        "the plateau start must lose: warm {} vs cold {}",
+        r_warm.outputs[0].objective, r_cold.outputs[0].objective
+    );
+}
+
+#[test]
+fn initial_hyper_is_pilcos_first_guess() {
+    let x = Mat::from_fn(4, 2, |i, j| (i * (j + 1)) as f64);
+    let y = Mat::from_fn(4, 1, |i, _| 2.0 * i as f64);
+    let h = initial_hyper(x.as_ref(), y.as_ref());
+    // Sample std (n − 1) of 0,1,2,3 is √(5/3); of 0,2,4,6 twice that.
+    let s = (5.0f64 / 3.0).sqrt();
+    assert!((h[0].log_ls[0] - s.ln()).abs() < 1e-12);
+    assert!((h[0].log_ls[1] - (2.0 * s).ln()).abs() < 1e-12);
+    assert!((h[0].log_sf - (2.0 * s).ln()).abs() < 1e-12);
+    assert!((h[0].log_sn - (0.2 * s).ln()).abs() < 1e-12);
 }
