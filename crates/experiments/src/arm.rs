@@ -339,9 +339,7 @@ pub fn setup<P>(
             sparse: SparseTrainOptions {
                 num_inducing: cfg.gp.n_inducing,
                 seed,
-                // Ours: with up to 2600 points, hyper-parameters on all of them would cost
-                // O(N³) per evaluation; they are fitted on a random subset of N_ii points.
-                hyper_points: Some(cfg.gp.n_inducing),
+                hyper_points: Some(cfg.gp.hyper_points),
                 ..SparseTrainOptions::default()
             },
         },

@@ -160,6 +160,9 @@ pub struct GpConfig {
     /// Full GP up to this many points, FITC above.
     pub sparse_threshold: usize,
     pub n_inducing: usize,
+    /// Above the sparse threshold the hyper-parameters are fitted on a random subset of this
+    /// many points (ours: all of up to 2600 points would cost O(N³) per evaluation).
+    pub hyper_points: usize,
     /// Line searches per hyper-parameter fit.
     pub line_searches: u64,
     /// Also fit the hyper-parameters from PILCO's first guess on the current data and keep the
@@ -366,6 +369,7 @@ impl ArmExperiment {
         let g = &self.gp;
         c.at_least("gp.sparse_threshold", g.sparse_threshold, 1)?;
         c.at_least("gp.n_inducing", g.n_inducing, 1)?;
+        c.at_least("gp.hyper_points", g.hyper_points, 1)?;
         c.at_least("gp.line_searches", g.line_searches as usize, 1)?;
         let s = &self.start;
         for i in 0..6 {

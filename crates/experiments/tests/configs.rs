@@ -41,6 +41,7 @@ fn assert_vil_common(c: &ArmExperiment) {
         (300, 300, 300)
     );
     assert!(c.gp.cold_restart);
+    assert_eq!(c.gp.hyper_points, 300);
     assert_eq!(c.policy.k_min, 5.0);
     assert_eq!(c.cost.position_dims, ["x", "y"]);
     assert_eq!(c.cost.position_target, [0.75, 0.20]);
@@ -88,6 +89,7 @@ fn vilta_configs_match_the_thesis_tables() {
     assert!(!v.gp.time_input);
     assert_eq!(v.gp.prior_mean, PriorMean::Zero);
     assert_eq!(v.gp.n_inducing, 300);
+    assert_eq!((v.gp.hyper_points, v.gp.cold_restart), (300, true));
     assert_eq!((v.policy.n_basis, v.n_params()), (Some(50), 416));
     assert_eq!(
         (v.policy.k_min, v.policy.k_max, v.policy.delta_max),
