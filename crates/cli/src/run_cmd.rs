@@ -66,13 +66,14 @@ impl LoopObserver for Progress {
             "no success".to_string()
         };
         let line = format!(
-            "episode {:>2}: predicted {:.2} ± {:.2}, recorded {:.2}, {} (train {:.1} s, optimise {:.1} s, {} evaluations)",
+            "episode {:>2}: predicted {:.2} ± {:.2}, recorded {:.2}, {} (train {:.1} s, {} cold restarts kept, optimise {:.1} s, {} evaluations)",
             r.index,
             r.predicted_return_mean,
             r.predicted_return_std,
             r.recorded_return,
             outcome,
             r.train_s,
+            r.cold_restarts,
             r.optimise_s,
             r.evaluations
         );

@@ -332,6 +332,7 @@ mod tests {
                     objective_end: r,
                     n_train: 100,
                     sparse: false,
+                    cold_restarts: 0,
                 },
                 colour: crate::summary::colour(if ok { 1.0 } else { 0.0 }).into(),
                 final_x: None,

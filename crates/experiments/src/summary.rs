@@ -187,6 +187,7 @@ mod tests {
             objective_end: 1.0,
             n_train: 40,
             sparse: false,
+            cold_restarts: 0,
         }
     }
 

@@ -234,6 +234,16 @@ pub enum DynamicsReport {
     Sparse(SparseTrainReport),
 }
 
+impl DynamicsReport {
+    /// The hyper-parameter training's report (on the subset in the sparse case).
+    pub fn hyper(&self) -> &TrainReport {
+        match self {
+            Self::Full(r) => r,
+            Self::Sparse(r) => &r.hyper,
+        }
+    }
+}
+
 impl DynamicsModel {
     /// Train and build the dynamics model of `targets` on `inputs`: the full GP when
     /// `N ≤ sparse_threshold`, else [`train_sparse`] (hyper-parameters warm-started from

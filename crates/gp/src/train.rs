@@ -119,6 +119,10 @@ impl TrainReport {
     pub fn objectives(&self) -> Vec<f64> {
         self.outputs.iter().map(|o| o.objective).collect()
     }
+    /// How many outputs kept the cold restart's fit.
+    pub fn cold_restarts(&self) -> usize {
+        self.outputs.iter().filter(|o| o.from_cold_restart).count()
+    }
 }
 
 /// Train the hyper-parameters of every output of an exact GP on `inputs` (N×D) and `targets`

@@ -126,6 +126,10 @@ pub struct EpisodeRecord {
     /// Training points of the dynamics model, and whether it was sparse.
     pub n_train: usize,
     pub sparse: bool,
+    /// Outputs whose hyper-parameters came from the cold restart rather than the warm start
+    /// (0 when the restart is off).
+    #[serde(default)]
+    pub cold_restarts: usize,
 }
 
 /// Everything the loop produced.
@@ -358,7 +362,7 @@ where
                 .clone()
                 .unwrap_or_else(|| initial_hyper(inputs.as_ref(), targets.as_ref()));
             let n_train = inputs.nrows();
-            let (model, _report) = DynamicsModel::fit(
+            let (model, report) = DynamicsModel::fit(
                 inputs,
                 targets,
                 &init,
@@ -470,6 +474,7 @@ where
                 objective_end: result.value,
                 n_train,
                 sparse: model.is_sparse(),
+                cold_restarts: report.hyper().cold_restarts(),
             };
             tracing::info!(
                 episode = ep,
