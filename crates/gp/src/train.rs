@@ -154,13 +154,18 @@ pub fn train(
             let Some(cold) = cold.as_ref().map(|g| &g[e]).filter(|g| *g != h) else {
                 return Ok(warm);
             };
-            let (hc, mut rc) = train_output(inputs, &y, cold, &c, opts).map_err(name)?;
-            // Ties keep the warm start, so a restart never moves a converged fit.
-            if rc.objective < warm.1.objective {
-                rc.from_cold_restart = true;
-                Ok((hc, rc))
-            } else {
-                Ok(warm)
+            match train_output(inputs, &y, cold, &c, opts) {
+                // Ties keep the warm start, so a restart never moves a converged fit.
+                Ok((hc, mut rc)) if rc.objective < warm.1.objective => {
+                    rc.from_cold_restart = true;
+                    Ok((hc, rc))
+                }
+                Ok(_) => Ok(warm),
+                // The restart is a second opinion: its failure leaves the warm fit standing.
+                Err(err) => {
+                    tracing::warn!(output = e, %err, "cold restart of the GP fit failed; keeping the warm start");
+                    Ok(warm)
+                }
             }
         })
         .collect();
