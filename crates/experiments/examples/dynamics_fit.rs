@@ -9,6 +9,7 @@
 //! Above 300 points it does what the sparse fit does to the hyper-parameters: trains them on
 //! the run's random 300-point subset, once from PILCO's cold start and once warm-started from
 //! the checkpoint's last fit, and scores the exact GP on that subset.
+//! Settings come from the shipped config of the run's experiment name (not a `--config` file).
 
 use anyhow::{Context, Result};
 use faer::Mat;
@@ -53,7 +54,7 @@ fn main() -> Result<()> {
         ..TrainOptions::default()
     };
     let (x, y) = if x.nrows() > cfg.gp.sparse_threshold {
-        let rows = select_subset(x.nrows(), cfg.gp.n_inducing, ck.seed);
+        let rows = select_subset(x.nrows(), cfg.gp.hyper_points, ck.seed);
         let pick = |m: &Mat<f64>| Mat::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)]);
         (pick(&x), pick(&y))
     } else {
