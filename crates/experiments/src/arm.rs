@@ -348,6 +348,7 @@ pub fn setup<P>(
             mfepls: cfg.optimiser.mfepls,
             memory: cfg.optimiser.memory,
             wolfe: Wolfe::PILCO,
+            scale_params: cfg.optimiser.scale_params,
         },
         initial_rollouts: 1,
         episodes: cfg.episodes,

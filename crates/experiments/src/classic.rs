@@ -161,6 +161,8 @@ where
             mfepls: scn.opt_mfepls as u64,
             memory: scn.opt_memory,
             wolfe: Wolfe::PILCO,
+            // PILCO's scenarios are in units where the raw parameters are well scaled.
+            scale_params: false,
         },
         initial_rollouts: scn.initial_rollouts,
         episodes: scn.policy_updates,

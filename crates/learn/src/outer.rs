@@ -31,6 +31,10 @@ pub struct OptimiserOptions {
     pub memory: usize,
     /// Line-search acceptance ([`Wolfe::PILCO`]: PILCO's more exact line searches).
     pub wolfe: Wolfe,
+    /// Search over `ψ / scale` with the policy's [`Policy::param_scales`], taken at the start
+    /// of each update (ours; `false`: PILCO's raw parameters). The objective is the same
+    /// function; only the optimiser's steps change.
+    pub scale_params: bool,
 }
 
 /// What the loop does between roll-outs, reported to an observer.
@@ -381,8 +385,17 @@ where
             let mm = MmModel::dynamics(&model);
             let base = self.policy.clone();
             let mut candidate = base.clone();
-            let mut objective = |p: &[f64]| -> Option<(f64, Vec<f64>)> {
-                candidate.set_params(p).ok()?;
+            let scales = if self.optimiser.scale_params {
+                base.param_scales()
+            } else {
+                vec![1.0; base.n_params()]
+            };
+            // The optimiser sees q = ψ / scale: J(q) = J(scale ⊙ q), dJ/dq = scale ⊙ dJ/dψ.
+            let unscale =
+                |q: &[f64]| -> Vec<f64> { q.iter().zip(&scales).map(|(q, s)| q * s).collect() };
+            let mut objective = |q: &[f64]| -> Option<(f64, Vec<f64>)> {
+                let p = unscale(q);
+                candidate.set_params(&p).ok()?;
                 let pred = Predictor::new(
                     &self.spec,
                     &candidate,
@@ -393,10 +406,16 @@ where
                 .ok()?;
                 let out = value(&pred, &self.ret, &self.prediction_starts, true).ok()?;
                 observer.objective(ep, out.j);
-                Some((out.j, out.grad?))
+                let grad = out.grad?.iter().zip(&scales).map(|(g, s)| g * s).collect();
+                Some((out.j, grad))
             };
-            let p0 = base.params();
-            let j_start = objective(&p0).map_or(f64::NAN, |(j, _)| j);
+            let q0: Vec<f64> = base
+                .params()
+                .iter()
+                .zip(&scales)
+                .map(|(p, s)| p / s)
+                .collect();
+            let j_start = objective(&q0).map_or(f64::NAN, |(j, _)| j);
             let opts = MinimizeOptions {
                 max_iters: self.optimiser.length,
                 grad_tol: 1e-8,
@@ -405,10 +424,10 @@ where
                 max_line_search_evals: Some(self.optimiser.mfepls),
                 wolfe: self.optimiser.wolfe,
             };
-            let result = minimize(&mut objective, p0, &opts).ok_or_else(|| {
+            let result = minimize(&mut objective, q0, &opts).ok_or_else(|| {
                 LearnError::NonFinite("the predicted return at the current policy".into())
             })?;
-            self.policy.set_params(&result.x)?;
+            self.policy.set_params(&unscale(&result.x))?;
             let optimise_s = t0.elapsed().as_secs_f64();
             let pred = Predictor::new(
                 &self.spec,

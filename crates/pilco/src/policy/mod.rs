@@ -54,4 +54,12 @@ pub trait Policy {
 
     /// The deterministic (unsquashed) action for a known input `x`.
     fn action(&self, x: &[f64]) -> Vec<f64>;
+
+    /// A typical size of each parameter (same order as [`Policy::params`]), for an optimiser
+    /// that should see every parameter on a comparable scale: it may search over `p / scale`
+    /// instead of `p`. The policy itself is unchanged. Default: all ones (PILCO's raw
+    /// parameters).
+    fn param_scales(&self) -> Vec<f64> {
+        vec![1.0; self.n_params()]
+    }
 }
