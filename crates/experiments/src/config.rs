@@ -139,6 +139,12 @@ pub struct OptimiserConfig {
     pub mfepls: u64,
     /// L-BFGS memory (ours).
     pub memory: usize,
+    /// Optimise the RBF centres in units of the policy's length-scales (ours; the policy and
+    /// the objective are unchanged, only the optimiser's steps). `false`, the default, is
+    /// PILCO's search over the raw parameters, where centres in metres with ℓ ≈ 0.1 m are
+    /// thrown out of the workspace by the first steps.
+    #[serde(default)]
+    pub scale_params: bool,
 }
 
 /// Where the relative targets' prior mean comes from.
@@ -448,9 +454,11 @@ impl ArmExperiment {
             "policy.init_std",
             "start.prediction_std",
             "initial.ou_theta",
+            "gp.hyper_points",
+            "gp.cold_restart",
         ];
         if self.policy.kind == PolicyKind::Rbf {
-            keys.push("policy.lengthscales");
+            keys.extend(["policy.lengthscales", "optimiser.scale_params"]);
         }
         if self.controller == ControllerKind::Sic && self.policy.kind == PolicyKind::Rbf {
             keys.push("policy.n_basis");

@@ -199,3 +199,41 @@ fn resuming_without_a_checkpoint_is_an_error_naming_the_file() {
     assert!(err.contains("checkpoint.json"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `optimiser.scale_params` changes the optimiser's steps, not the objective: the first
+/// update starts from the same predicted return with and without it, and ends elsewhere.
+#[test]
+fn scaling_the_policy_parameters_keeps_the_objective_and_changes_the_search() {
+    let base = std::env::temp_dir().join(format!("vicpilco-scaled-{}", std::process::id()));
+    let text = vicpilco_experiments::config::shipped("vil-gic").unwrap().1;
+    assert!(text.contains("scale_params = true"));
+    let raw = base.join("raw.toml");
+    std::fs::create_dir_all(&base).unwrap();
+    std::fs::write(
+        &raw,
+        text.replace("scale_params = true", "scale_params = false"),
+    )
+    .unwrap();
+    let first_update = |name: &str, config: Option<std::path::PathBuf>| {
+        let opts = RunOptions {
+            seed: 3,
+            out: base.join(name),
+            episodes: Some(1),
+            quick: true,
+            config,
+            ..Default::default()
+        };
+        let summary = run("vil-gic", &opts, &mut ()).expect("vil-gic quick run");
+        let e = &summary.episodes[0];
+        (e.objective_start, e.objective_end)
+    };
+    let (start_scaled, end_scaled) = first_update("scaled", None);
+    let (start_raw, end_raw) = first_update("raw", Some(raw));
+    assert!(
+        (start_scaled - start_raw).abs() <= 1e-9 * start_raw.abs(),
+        "{start_scaled} vs {start_raw}"
+    );
+    assert!(end_scaled.is_finite() && end_raw.is_finite());
+    assert!(end_scaled != end_raw, "both searches ended at {end_raw}");
+    let _ = std::fs::remove_dir_all(&base);
+}
