@@ -37,12 +37,16 @@ fn main() -> Result<()> {
     let params: Vec<f64> = serde_json::from_value(saved["params"].clone())?;
     let (label, cfg_text) = config::shipped(&ck.experiment).context("unknown experiment")?;
     let cfg = config::parse(cfg_text, label)?;
+    anyhow::ensure!(
+        cfg.policy.kind == config::PolicyKind::Rbf,
+        "{}: model_drift replays RBF-policy runs only",
+        ck.experiment
+    );
     let mut policy = arm::rbf_policy(&cfg, 0)?;
     policy.set_params(&params)?;
     let (setup, _env) = arm::setup(&cfg, policy.clone(), ck.seed)?;
     let data = &ck.state.data;
     anyhow::ensure!(data.len() >= to, "the run has {} roll-outs", data.len());
-    let w3 = setup.ret.energy.as_ref().map_or(0.0, |(_, w)| *w);
 
     print!("{:>3}{:>7}{:>9}{:>8}{:>9}", "K", "N", "J", "mean", "std");
     for (_, name) in INPUTS {
@@ -79,11 +83,7 @@ fn main() -> Result<()> {
             setup.prior_shift.as_deref(),
         )?;
         let out = value(&pred, &setup.ret, &setup.prediction_starts, false)?;
-        let (mut mean, mut std) = (0.0, 0.0);
-        for s in &out.trajectories[0] {
-            mean += setup.ret.w_mean * s.cost_mean + w3 * s.energy_mean;
-            std += setup.ret.w_mean * s.cost_var.max(0.0).sqrt();
-        }
+        let (mean, std) = setup.ret.predicted_return(&out);
         let h = &model.hyp()[DXD];
         print!("{k:>3}{n:>7}{:>9.2}{mean:>8.2}{std:>9.2}", out.j);
         for (i, _) in INPUTS {

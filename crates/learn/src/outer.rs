@@ -280,19 +280,6 @@ where
             .sum()
     }
 
-    fn predicted(&self, out: &ValueOut) -> (f64, f64) {
-        let traj = &out.trajectories[0];
-        let w3 = self.ret.energy.as_ref().map_or(0.0, |(_, w)| *w);
-        let mut mean = 0.0;
-        let mut std = 0.0;
-        for (t, s) in traj.iter().enumerate() {
-            let disc = self.ret.gamma.powi(t as i32 + 1);
-            mean += disc * (self.ret.w_mean * s.cost_mean + w3 * s.energy_mean);
-            std += disc * self.ret.w_mean * s.cost_var.max(0.0).sqrt();
-        }
-        (mean, std)
-    }
-
     /// Run the whole loop on `env`: the initial roll-outs, then every update.
     pub fn run(
         self,
@@ -437,7 +424,7 @@ where
                 self.prior_shift.as_deref(),
             )?;
             let out = value(&pred, &self.ret, &self.prediction_starts, false)?;
-            let (predicted_mean, predicted_std) = self.predicted(&out);
+            let (predicted_mean, predicted_std) = self.ret.predicted_return(&out);
             observer.predicted(ep, &out);
             predictions.push(out);
 

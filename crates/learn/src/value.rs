@@ -39,6 +39,23 @@ pub struct ReturnSpec {
     pub horizon: usize,
 }
 
+impl ReturnSpec {
+    /// The predicted return of the first start distribution as reported to users: the
+    /// discounted sum of the weighted expected costs (energy included) and of the per-step cost
+    /// standard deviations (an upper bound on the return's std, as PILCO plots it).
+    pub fn predicted_return(&self, out: &ValueOut) -> (f64, f64) {
+        let w3 = self.energy.as_ref().map_or(0.0, |(_, w)| *w);
+        let mut mean = 0.0;
+        let mut std = 0.0;
+        for (t, s) in out.trajectories[0].iter().enumerate() {
+            let disc = self.gamma.powi(t as i32 + 1);
+            mean += disc * (self.w_mean * s.cost_mean + w3 * s.energy_mean);
+            std += disc * self.w_mean * s.cost_var.max(0.0).sqrt();
+        }
+        (mean, std)
+    }
+}
+
 /// One predicted step as recorded for reports.
 #[derive(Clone, Debug)]
 pub struct PredictedStep {
