@@ -260,16 +260,9 @@ fn train_output(
 /// PILCO's first guess of the hyper-parameters from the data: length-scales = input standard
 /// deviations, signal std = target std, noise std = target std / 10.
 pub fn initial_hyper(inputs: MatRef<'_, f64>, targets: MatRef<'_, f64>) -> Vec<Hyper> {
-    let std = |m: MatRef<'_, f64>, c: usize| -> f64 {
-        let n = m.nrows() as f64;
-        let mean = (0..m.nrows()).map(|i| m[(i, c)]).sum::<f64>() / n;
-        let var = (0..m.nrows())
-            .map(|i| (m[(i, c)] - mean).powi(2))
-            .sum::<f64>()
-            / (n - 1.0).max(1.0);
-        // A constant column (e.g. a saturated action) would give log 0.
-        var.sqrt().max(1e-6)
-    };
+    // A constant column (e.g. a saturated action) would give log 0; the floor keeps PILCO's
+    // guess finite while leaving that length-scale tiny, unlike `input_std`'s floor of 1.
+    let std = |m: MatRef<'_, f64>, c: usize| nlml::column_std(m, c).max(1e-6);
     let log_ls: Vec<f64> = (0..inputs.ncols()).map(|c| std(inputs, c).ln()).collect();
     (0..targets.ncols())
         .map(|e| {

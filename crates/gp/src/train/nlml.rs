@@ -82,19 +82,24 @@ impl HypCurb {
     }
 }
 
-/// Sample standard deviation (N−1 normalisation, MATLAB's `std`) of every input column: the
-/// `c_d` of [`HypCurb`]. A column with zero spread (or a single row) gets 1, so the penalty stays
-/// finite.
+/// Sample standard deviation (N−1 normalisation, MATLAB's `std`) of column `c`; 0 for fewer than
+/// two rows. Callers choose their own floor for a zero spread, because a zero cannot go into a log.
+pub(crate) fn column_std(m: MatRef<'_, f64>, c: usize) -> f64 {
+    let n = m.nrows();
+    if n < 2 {
+        return 0.0;
+    }
+    let mean = (0..n).map(|i| m[(i, c)]).sum::<f64>() / n as f64;
+    let ss: f64 = (0..n).map(|i| (m[(i, c)] - mean).powi(2)).sum();
+    (ss / (n - 1) as f64).sqrt()
+}
+
+/// [`column_std`] of every input column: the `c_d` of [`HypCurb`]. A column with zero spread (or
+/// a single row) gets 1, so the penalty stays finite.
 pub fn input_std(inputs: MatRef<'_, f64>) -> Vec<f64> {
-    let n = inputs.nrows();
     (0..inputs.ncols())
         .map(|c| {
-            if n < 2 {
-                return 1.0;
-            }
-            let mean = (0..n).map(|i| inputs[(i, c)]).sum::<f64>() / n as f64;
-            let ss: f64 = (0..n).map(|i| (inputs[(i, c)] - mean).powi(2)).sum();
-            let s = (ss / (n - 1) as f64).sqrt();
+            let s = column_std(inputs, c);
             if s > 0.0 && s.is_finite() {
                 s
             } else {
