@@ -113,11 +113,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .with_context(|| format!("running `{}`", args.name))?;
     progress.bar.finish_and_clear();
     println!(
-        "{}: seed {}, {} updates, solved at update {}, {:.1} s of interaction, {:.0} s wall; wrote {}",
+        "{}: seed {}, {} updates, {}, {:.1} s of interaction, {:.0} s wall; wrote {}",
         summary.experiment,
         summary.seed,
         summary.episodes.len(),
-        summary.solved_at_episode.map_or("never".to_string(), |e| e.to_string()),
+        summary
+            .solved_at_episode
+            .map_or("never solved".to_string(), |e| format!(
+                "solved at update {e}"
+            )),
         summary.interaction_s,
         summary.wall_s,
         out.join("summary.json").display()
