@@ -19,7 +19,7 @@ use std::time::Duration;
 use vicpilco_bench::{rows_to_mat, W1};
 use vicpilco_gp::linalg::JitterPolicy;
 use vicpilco_gp::sparse::{fitc_nlml, select_subset};
-use vicpilco_gp::train::{input_std, nlml_with_kernel, train, NlmlWorkspace, TrainOptions};
+use vicpilco_gp::train::{initial_hyper, nlml_with_kernel, train, NlmlWorkspace, TrainOptions};
 use vicpilco_gp::{Hyper, SparseGpModel, SquaredExponential};
 
 /// W1's training inputs, targets and start point, or `None` (with a notice) when absent.
@@ -98,18 +98,8 @@ fn smooth_problem(
             + 0.3 * (x[(i, k)]).cos()
             + 0.01 * Distribution::<f64>::sample(&StandardNormal, &mut rng)
     });
-    let c = input_std(x.as_ref());
-    let hyp = (0..e)
-        .map(|k| {
-            let col = Mat::from_fn(n, 1, |i, _| y[(i, k)]);
-            let sy = input_std(col.as_ref())[0];
-            Hyper {
-                log_ls: c.iter().map(|v| v.ln()).collect(),
-                log_sf: sy.ln(),
-                log_sn: (sy / 10.0).ln(),
-            }
-        })
-        .collect();
+    // PILCO's first guess: the workload the bench times starts where training starts.
+    let hyp = initial_hyper(x.as_ref(), y.as_ref());
     let sub = select_subset(n, m, 1);
     let u = Mat::from_fn(m, d, |i, c| x[(sub[i], c)]);
     (x, y, hyp, u)
