@@ -52,12 +52,12 @@ enum Command {
     /// (per step), summary.json (inserted, final x, max |f|, wall time, real-time factor) and
     /// plot.png into DIR.
     Sim(sim_cmd::Args),
-    /// Plot a run directory and write a self-contained HTML report into it.
+    /// Plot a run directory and write a self-contained HTML report (and its tables as Markdown).
     ///
     /// Writes returns, policy, prediction_first/_last, cost_first/_last and, for arm runs,
-    /// paths and final_eval as PNG and SVG, and report.html (settings, per-update results, the
-    /// thesis comparison, totals, every plot inlined). Missing optional files or fields skip
-    /// a plot with a note instead of failing.
+    /// paths and final_eval as PNG and SVG, report.html (settings, per-update results, the
+    /// thesis comparison, totals, every plot inlined) and report.md (its tables as Markdown).
+    /// Missing optional files or fields skip a plot with a note instead of failing.
     Report(report_cmd::Args),
 }
 

@@ -14,7 +14,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let files = vicpilco_report::write_report(&args.dir)
         .with_context(|| format!("writing the report of {}", args.dir.display()))?;
-    let mut listing = format!("{}\n", files.html.display());
+    let mut listing = format!("{}\n{}\n", files.html.display(), files.markdown.display());
     for f in &files.images {
         listing.push_str(&format!("{}\n", f.display()));
     }

@@ -11,7 +11,8 @@
 //! * `checkpoint.json` — what `--resume` needs to continue bit for bit;
 //! * `policy.json` — the final policy parameters and dynamics hyper-parameters;
 //! * `final_eval.jsonl` — runs with evaluation starts: the final policy from fresh starts;
-//! * `report.html` and its plots (PNG, SVG) — [`vicpilco_report`], rewritten after every update.
+//! * `report.html`, `report.md` and the plots (PNG, SVG) — [`vicpilco_report`], rewritten
+//!   after every update.
 //!
 //! Experiments: `pendulum` and `cartpole` (PILCO's swing-ups, [`classic`]), and the thesis's
 //! peg-in-hole runs configured by `experiments/*.toml` ([`config`], [`arm`]).

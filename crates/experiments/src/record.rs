@@ -3,7 +3,8 @@
 //! * every roll-out is appended to `rollouts.jsonl` when it is recorded, with its weighted
 //!   cost per step;
 //! * every update's long-term prediction is appended to `predictions.jsonl`;
-//! * `summary.json` is rewritten after every update, and the plots and `report.html` with it;
+//! * `summary.json` is rewritten after every update, and the plots, `report.html` and
+//!   `report.md` with it;
 //! * `checkpoint.json` after the initial roll-outs and after every update: the loop state
 //!   ([`LoopState`]: data, hyper-parameters, inducing inputs, policy, records), the summary so
 //!   far and the config it belongs to. Every random stream is derived from the master seed and

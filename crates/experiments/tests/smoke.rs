@@ -142,6 +142,7 @@ fn vil_gic_quick_run_writes_every_file_and_resumes_bit_for_bit() {
         "checkpoint.json",
         "policy.json",
         "report.html",
+        "report.md",
         "returns.png",
         "returns.svg",
         "policy.png",

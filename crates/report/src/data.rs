@@ -45,6 +45,13 @@ pub(crate) struct Episode {
     pub train_s: Option<f64>,
     pub optimise_s: Option<f64>,
     pub evaluations: Option<u64>,
+    /// Arm runs: the peg's x at the end of the first roll-out, metres.
+    pub final_x: Option<f64>,
+    /// Arm runs: the largest contact force magnitude of the first roll-out, newtons.
+    pub max_force: Option<f64>,
+    /// Points in the dynamics model's training set, and whether it was the sparse (FITC) GP.
+    pub n_train: Option<u64>,
+    pub sparse: Option<bool>,
 }
 
 impl Episode {
@@ -79,6 +86,9 @@ pub(crate) struct Summary {
     pub policy: Option<String>,
     pub n_params: Option<u64>,
     pub initial_return: Option<f64>,
+    /// Arm runs: the return of constant gains on the same simulator, and whether they insert.
+    pub constant_gain_return: Option<f64>,
+    pub constant_gain_inserted: Option<bool>,
     pub episodes: Vec<Episode>,
     pub solved_at_episode: Option<u64>,
     pub interaction_s: Option<f64>,
@@ -283,6 +293,8 @@ fn parse_summary(n: Node<'_>) -> Result<Summary, ReportError> {
         policy: n.opt_string("policy")?,
         n_params: n.opt_u64("n_params")?,
         initial_return: n.opt_f64("initial_return")?,
+        constant_gain_return: n.opt_f64("constant_gain_return")?,
+        constant_gain_inserted: n.opt_bool("constant_gain_inserted")?,
         episodes,
         solved_at_episode: n.opt_u64("solved_at_episode")?,
         interaction_s: n.opt_f64("interaction_s")?,
@@ -309,6 +321,10 @@ fn parse_episode(n: Node<'_>) -> Result<Episode, ReportError> {
         train_s: n.opt_f64("train_s")?,
         optimise_s: n.opt_f64("optimise_s")?,
         evaluations: n.opt_u64("evaluations")?,
+        final_x: n.opt_f64("final_x")?,
+        max_force: n.opt_f64("max_force")?,
+        n_train: n.opt_u64("n_train")?,
+        sparse: n.opt_bool("sparse")?,
     })
 }
 

@@ -10,8 +10,8 @@
 //! * `cost_first`, `cost_last`: predicted against recorded immediate cost;
 //! * arm runs: `paths` (x–y paths with wall and hole) and, with final_eval.jsonl, `final_eval`;
 //!
-//! each as PNG and SVG, and `report.html` with the settings, per-update results, the thesis
-//! comparison, totals and every PNG inlined. Runs from before a file or field existed still
+//! each as PNG and SVG, `report.html` with the settings, per-update results, the thesis
+//! comparison, totals and every PNG inlined, and `report.md` with the same tables as Markdown. Runs from before a file or field existed still
 //! get a report; what could not be drawn is listed in it.
 
 mod data;
@@ -19,6 +19,7 @@ mod error;
 mod figures;
 mod html;
 mod json;
+mod markdown;
 mod plot;
 
 #[cfg(test)]
@@ -34,26 +35,35 @@ use std::path::{Path, PathBuf};
 #[derive(Clone, Debug)]
 pub struct ReportFiles {
     pub html: PathBuf,
+    /// The tables of report.html as Markdown.
+    pub markdown: PathBuf,
     /// Every PNG and SVG, in report order.
     pub images: Vec<PathBuf>,
     /// Why a figure or part of one is missing, as shown in the report.
     pub notes: Vec<String>,
 }
 
-/// Reads the run directory `dir` and writes the plots and report.html into it.
+/// Reads the run directory `dir` and writes the plots, report.html and report.md into it.
 pub fn write_report(dir: &Path) -> Result<ReportFiles, ReportError> {
     let run = data::Run::load(dir)?;
     let mut notes = run.notes.clone();
     let plots = figures::draw_all(&run, dir, &mut notes)?;
     let page = html::render(&run, dir, &plots, &notes)?;
     let file = dir.join("report.html");
-    std::fs::write(&file, page).map_err(|error| ReportError::Write {
-        file: file.clone(),
-        error,
-    })?;
+    write(&file, page)?;
+    let markdown = dir.join("report.md");
+    write(&markdown, markdown::render(&run))?;
     Ok(ReportFiles {
         html: file,
+        markdown,
         images: plots.into_iter().flat_map(|p| [p.png, p.svg]).collect(),
         notes,
+    })
+}
+
+fn write(file: &Path, text: String) -> Result<(), ReportError> {
+    std::fs::write(file, text).map_err(|error| ReportError::Write {
+        file: file.to_path_buf(),
+        error,
     })
 }

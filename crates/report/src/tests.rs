@@ -310,3 +310,87 @@ fn strings_from_the_run_are_escaped() {
     assert!(page.contains("&lt;script&gt;alert(&#39;x&#39;)&lt;/script&gt;"));
     assert!(page.contains("return &lt; 20 &amp; &quot;fast&quot;"));
 }
+
+fn markdown(dir: &Path) -> String {
+    std::fs::read_to_string(dir.join("report.md")).unwrap()
+}
+
+/// The Markdown rows of the table that follows `heading`, without header and rule.
+fn md_rows<'a>(page: &'a str, heading: &str) -> Vec<Vec<&'a str>> {
+    let start = page
+        .find(heading)
+        .unwrap_or_else(|| panic!("no {heading:?}"));
+    page[start..]
+        .lines()
+        .skip_while(|l| !l.starts_with('|'))
+        .take_while(|l| l.starts_with('|'))
+        .skip(2)
+        .map(|l| l.trim_matches('|').split(" | ").map(str::trim).collect())
+        .collect()
+}
+
+#[test]
+fn markdown_report_has_a_row_per_update_and_every_claim() {
+    let tmp = TempDir::new("md-vil");
+    write_run(tmp.path(), Kind::Vil);
+    let files = write_report(tmp.path()).unwrap();
+    assert_eq!(files.markdown, tmp.path().join("report.md"));
+    let page = markdown(tmp.path());
+    assert!(page.starts_with("# vil-gic-rbf10 — seed 1\n"));
+
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(tmp.path().join("summary.json")).unwrap())
+            .unwrap();
+    let eps = summary["episodes"].as_array().unwrap();
+    let rows = md_rows(&page, "## Policy updates");
+    assert_eq!(rows.len(), eps.len());
+    for (row, e) in rows.iter().zip(eps) {
+        assert_eq!(row.len(), 10, "{row:?}");
+        assert_eq!(row[0], e["index"].to_string());
+        assert_eq!(
+            row[2],
+            format!("{:.1}", e["recorded_return"].as_f64().unwrap())
+        );
+        assert_eq!(row[3], e["colour"].as_str().unwrap());
+        assert_eq!(row[4], format!("{:.3}", e["final_x"].as_f64().unwrap()));
+        let n = e["n_train"].as_u64().unwrap();
+        let want = if e["sparse"].as_bool().unwrap() {
+            format!("{n} (FITC)")
+        } else {
+            n.to_string()
+        };
+        assert_eq!(row[9], want);
+    }
+
+    let claims = md_rows(&page, "## Against the thesis");
+    let verdicts: Vec<&str> = claims.iter().map(|r| r[3]).collect();
+    assert_eq!(verdicts, ["pass", "fail", "undecided"]);
+    assert_eq!(claims[1][2], "31.2");
+
+    let totals = md_rows(&page, "## Totals");
+    let value = |k: &str| totals.iter().find(|r| r[0] == k).map(|r| r[1]).unwrap();
+    assert_eq!(value("policy updates"), eps.len().to_string());
+    assert_eq!(value("solved at"), "update 4");
+    assert_eq!(
+        value("mean wall time per update (s)"),
+        format!("{:.0}", 1234.5 / eps.len() as f64)
+    );
+}
+
+#[test]
+fn markdown_report_of_a_classic_run_has_no_arm_columns_and_escapes_pipes() {
+    let tmp = TempDir::new("md-pendulum");
+    write_run(tmp.path(), Kind::Pendulum);
+    edit_json(&tmp.path().join("summary.json"), |v| {
+        v["thesis_reference"][0]["claim"] = "a | b\nc".into();
+    });
+    write_report(tmp.path()).unwrap();
+    let page = markdown(tmp.path());
+    let rows = md_rows(&page, "## Policy updates");
+    assert!(
+        !rows.is_empty() && rows.iter().all(|r| r.len() == 8),
+        "{rows:?}"
+    );
+    assert!(!page.contains("final x"));
+    assert!(page.contains("| a \\| b c |"), "{page}");
+}
