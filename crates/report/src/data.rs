@@ -101,6 +101,28 @@ pub(crate) struct Summary {
     pub thesis_reference: Option<Vec<Claim>>,
 }
 
+impl Summary {
+    /// "update k", "not solved", or a dash before the first update.
+    pub fn solved_text(&self) -> String {
+        match (self.solved_at_episode, self.episodes.is_empty()) {
+            (Some(k), _) => format!("update {k}"),
+            (None, false) => "not solved".into(),
+            (None, true) => "–".into(),
+        }
+    }
+
+    /// Wall time over policy updates (initial roll-outs included in the wall time).
+    pub fn wall_per_update(&self) -> Option<f64> {
+        let n = self.episodes.len();
+        self.wall_s.filter(|_| n > 0).map(|w| w / n as f64)
+    }
+}
+
+/// A number with `decimals` decimals, or a dash when absent.
+pub(crate) fn num(v: Option<f64>, decimals: usize) -> String {
+    v.map_or_else(|| "–".into(), |v| format!("{v:.decimals$}"))
+}
+
 pub(crate) struct Rollout {
     pub episode: u64,
     pub costs: Option<Vec<f64>>,

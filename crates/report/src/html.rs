@@ -1,7 +1,7 @@
 //! report.html: one file with every image inlined as a data: URI, so it can be mailed or
 //! archived alone. Every string from the run files is escaped.
 
-use crate::data::{Colour, Run};
+use crate::data::{num, Colour, Run};
 use crate::figures::Plot;
 use crate::ReportError;
 use base64::Engine;
@@ -51,10 +51,6 @@ figure { margin: 1.2em 0 2em; }
 figure img { max-width: 100%; height: auto; border: 1px solid #ddd; }
 figcaption { font-size: 14px; color: #444; margin-top: 0.3em; }
 "#;
-
-fn num(v: Option<f64>, decimals: usize) -> String {
-    v.map_or_else(|| "–".into(), |v| format!("{v:.decimals$}"))
-}
 
 /// Config keys as dotted paths (`geometry.wall_x`); arrays stay one JSON value.
 fn flatten(prefix: &str, v: &Value, out: &mut Vec<(String, String)>) {
@@ -272,21 +268,15 @@ fn thesis(h: &mut String, run: &Run) {
 fn totals(h: &mut String, run: &Run) {
     let s = &run.summary;
     h.push_str("<h2>Totals</h2>\n<table class=\"totals\"><tbody>\n");
-    let per_update = match (s.wall_s, s.episodes.len()) {
-        (Some(w), n) if n > 0 => Some(w / n as f64),
-        _ => None,
-    };
-    let solved = match (s.solved_at_episode, s.episodes.is_empty()) {
-        (Some(k), _) => format!("update {k}"),
-        (None, false) => "not solved".into(),
-        (None, true) => "–".into(),
-    };
     for (k, v) in [
         ("interaction time [s]", num(s.interaction_s, 1)),
         ("wall time [s]", num(s.wall_s, 1)),
-        ("mean wall time per policy update [s]", num(per_update, 1)),
+        (
+            "mean wall time per policy update [s]",
+            num(s.wall_per_update(), 1),
+        ),
         ("policy updates", s.episodes.len().to_string()),
-        ("solved at", solved),
+        ("solved at", s.solved_text()),
     ] {
         let _ = writeln!(h, "<tr><th>{k}</th><td class=\"num\">{}</td></tr>", esc(&v));
     }

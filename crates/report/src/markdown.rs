@@ -2,16 +2,12 @@
 //! EXPERIMENTS.md (or an issue) as they were written, not retyped. No plots: they live in
 //! report.html and the PNG/SVG files beside it.
 
-use crate::data::{Colour, Run};
+use crate::data::{num, Colour, Run};
 use std::fmt::Write;
 
 /// A table cell: a `|` would end the cell and a line break the row.
 fn cell(s: &str) -> String {
     s.replace('|', "\\|").replace(['\n', '\r'], " ")
-}
-
-fn num(v: Option<f64>, decimals: usize) -> String {
-    v.map_or_else(|| "–".into(), |v| format!("{v:.decimals$}"))
 }
 
 fn row(h: &mut String, cells: &[String]) {
@@ -136,11 +132,6 @@ fn totals(h: &mut String, run: &Run) {
         .iter()
         .filter(|e| e.colour() == Some(Colour::Green))
         .count();
-    let solved = match (s.solved_at_episode, n) {
-        (Some(k), _) => format!("update {k}"),
-        (None, 0) => "–".into(),
-        (None, _) => "not solved".into(),
-    };
     let constant = match (s.constant_gain_return, s.constant_gain_inserted) {
         (Some(r), Some(true)) => format!("{r:.1} (inserts)"),
         (Some(r), Some(false)) => format!("{r:.1} (does not insert)"),
@@ -153,15 +144,12 @@ fn totals(h: &mut String, run: &Run) {
             "updates whose every roll-out succeeds",
             format!("{inserting} of {n}"),
         ),
-        ("solved at", solved),
+        ("solved at", s.solved_text()),
         ("initial roll-out's return", num(s.initial_return, 1)),
         ("constant gains' return", constant),
         ("interaction time (s)", num(s.interaction_s, 1)),
         ("wall time (s)", num(s.wall_s, 0)),
-        (
-            "mean wall time per update (s)",
-            num(s.wall_s.filter(|_| n > 0).map(|w| w / n as f64), 0),
-        ),
+        ("mean wall time per update (s)", num(s.wall_per_update(), 0)),
         ("mean train per update (s)", num(mean(|e| e.train_s), 0)),
         (
             "mean optimise per update (s)",
