@@ -74,17 +74,19 @@ where
 /// Mean (k_x, k_y) over the first and the last [`GAIN_WINDOW_S`] seconds of a roll-out.
 pub fn gains_first_last(r: &Rollout, dt: f64) -> [[f64; 2]; 2] {
     let n = ((GAIN_WINDOW_S / dt).round() as usize).clamp(1, r.len().max(1));
-    let mean = |acts: &[Vec<f64>]| -> [f64; 2] {
-        let c = acts.len().max(1) as f64;
-        [
-            acts.iter().map(|a| a[0]).sum::<f64>() / c,
-            acts.iter().map(|a| a[1]).sum::<f64>() / c,
-        ]
-    };
     let len = r.actions.len();
     [
-        mean(&r.actions[..n.min(len)]),
-        mean(&r.actions[len.saturating_sub(n)..]),
+        mean_gains(&r.actions[..n.min(len)]),
+        mean_gains(&r.actions[len.saturating_sub(n)..]),
+    ]
+}
+
+/// Mean (k_x, k_y), the first two action components, over `actions`.
+pub fn mean_gains(actions: &[Vec<f64>]) -> [f64; 2] {
+    let c = actions.len().max(1) as f64;
+    [
+        actions.iter().map(|a| a[0]).sum::<f64>() / c,
+        actions.iter().map(|a| a[1]).sum::<f64>() / c,
     ]
 }
 
@@ -214,9 +216,13 @@ pub fn thesis_checks(
         out.push(check(
             "mean k_y over the last roll-out above the GIC run's (compare in EXPERIMENTS.md)",
             "SIC needs stiffer gains",
-            s.final_gains.map_or("n.a.".into(), |g| {
-                format!("first 2 s {:.0}, last 2 s {:.0} N/m", g[0][1], g[1][1])
-            }),
+            match (s.final_mean_gains, s.final_gains) {
+                (Some(m), Some(g)) => format!(
+                    "{:.0} N/m (first 2 s {:.0}, last 2 s {:.0})",
+                    m[1], g[0][1], g[1][1]
+                ),
+                _ => "n.a.".into(),
+            },
             None,
         ));
     }
@@ -357,6 +363,7 @@ mod tests {
             constant_gain_inserted: None,
             final_eval: None,
             final_gains: None,
+            final_mean_gains: None,
         }
     }
 
@@ -406,5 +413,35 @@ mod tests {
         let early: Vec<_> = (1..=25).map(|i| (70.0, i >= 12)).collect();
         let checks = thesis_checks("vil-gic-lin", &c, 25, &summary(&early));
         assert_eq!(verdict(&checks, "5 consecutive"), Some(true));
+    }
+
+    #[test]
+    fn gain_means_cover_the_windows_and_the_whole_episode() {
+        // k_x = 10 t, k_y = 100 − t/2 over t = 0..99 (steps of 0.1 s: 20 steps per 2 s window).
+        let actions: Vec<Vec<f64>> = (0..100)
+            .map(|t| vec![10.0 * t as f64, 100.0 - 0.5 * t as f64])
+            .collect();
+        let r = Rollout {
+            observations: vec![vec![0.0]; 101],
+            actions: actions.clone(),
+            true_states: vec![vec![0.0]; 101],
+            infos: Vec::new(),
+            used_for_training: true,
+        };
+        let [first, last] = gains_first_last(&r, 0.1);
+        assert_eq!(first, [95.0, 95.25]);
+        assert_eq!(last, [895.0, 55.25]);
+        assert_eq!(mean_gains(&actions), [495.0, 75.25]);
+
+        let mut s = summary(&[(70.0, true)]);
+        s.final_gains = Some([first, last]);
+        s.final_mean_gains = Some(mean_gains(&actions));
+        let checks = thesis_checks("vil-sic", &cfg("vil-sic"), 25, &s);
+        let row = checks
+            .iter()
+            .find(|c| c.claim.contains("mean k_y"))
+            .unwrap();
+        assert_eq!(row.measured, "75 N/m (first 2 s 95, last 2 s 55)");
+        assert_eq!(row.pass, None);
     }
 }

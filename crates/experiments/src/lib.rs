@@ -318,6 +318,7 @@ where
             constant_gain_inserted: None,
             final_eval: None,
             final_gains: None,
+            final_mean_gains: None,
         },
     };
     let labels = PredictionLabels {

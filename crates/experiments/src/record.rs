@@ -300,6 +300,7 @@ impl LoopObserver for Recorder<'_> {
         };
         if let (Some(_), Some(r)) = (self.extras, &self.current) {
             self.summary.final_gains = Some(crate::checks::gains_first_last(r, self.dt));
+            self.summary.final_mean_gains = Some(crate::checks::mean_gains(&r.actions));
         }
         self.summary.episodes.push(EpisodeSummary {
             record: record.clone(),

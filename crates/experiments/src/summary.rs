@@ -82,6 +82,10 @@ pub struct Summary {
     /// Arm runs: mean (k_x, k_y) of the last learned roll-out over its first and its last
     /// [`crate::checks::GAIN_WINDOW_S`] seconds.
     pub final_gains: Option<[[f64; 2]; 2]>,
+    /// Arm runs: mean (k_x, k_y) of the last learned roll-out over the whole episode, the
+    /// number the thesis compares between SIC and GIC (§5-4-2).
+    #[serde(default)]
+    pub final_mean_gains: Option<[f64; 2]>,
 }
 
 /// The final policy from fresh starts (`final_eval.jsonl` holds the roll-outs).
@@ -230,6 +234,7 @@ mod tests {
             constant_gain_inserted: None,
             final_eval: None,
             final_gains: None,
+            final_mean_gains: None,
         };
         let dir = std::env::temp_dir();
         assert!(matches!(s.write(&dir), Err(WriteError::NonFinite { .. })));
