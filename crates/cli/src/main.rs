@@ -1,6 +1,7 @@
 //! `vicpilco`: the command-line edge. Library crates return typed errors; this file turns them
 //! into messages and exit codes.
 
+mod acceptance_cmd;
 mod bench_cmd;
 mod oracle_cmd;
 mod report_cmd;
@@ -59,6 +60,13 @@ enum Command {
     /// thesis comparison, totals, every plot inlined) and report.md (its tables as Markdown).
     /// Missing optional files or fields skip a plot with a note instead of failing.
     Report(report_cmd::Args),
+    /// Issue 6's acceptance table: each thesis claim over the seeds given, and its verdict.
+    ///
+    /// Reads DIR/summary.json of every run (one per experiment and seed), lists per experiment
+    /// each claim's measured value and pass/fail per seed, how many seeds pass and the verdict
+    /// under the claim's rule (3 of 5 seeds, or every run). vil-sic's "mean k_y above GIC's" is
+    /// decided against a vil-gic run of the same seed when one is given.
+    Acceptance(acceptance_cmd::Args),
 }
 
 fn main() -> ExitCode {
@@ -76,6 +84,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench_cmd::run(args).map(|()| ExitCode::SUCCESS),
         Command::Sim(args) => sim_cmd::run(args),
         Command::Report(args) => report_cmd::run(args).map(|()| ExitCode::SUCCESS),
+        Command::Acceptance(args) => acceptance_cmd::run(args).map(|()| ExitCode::SUCCESS),
     };
     match result {
         Ok(code) => code,

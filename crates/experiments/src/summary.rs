@@ -39,12 +39,27 @@ pub fn colour(success_fraction: f64) -> &'static str {
 /// One of the thesis's claims next to what the run measured.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ThesisCheck {
+    /// Stable name of the claim, the same in every run that makes it (the text may be reworded).
+    #[serde(default)]
+    pub id: String,
     pub claim: String,
     /// What the thesis reports.
     pub thesis: String,
     pub measured: String,
     /// `None` when the run is too short to decide.
     pub pass: Option<bool>,
+    /// How the seeds' verdicts combine into the claim's acceptance verdict (issue 6).
+    /// Summaries written before this field existed read as `None`.
+    #[serde(default)]
+    pub across_seeds: Option<SeedRule>,
+}
+
+/// How many of a configuration's acceptance runs (one per seed) must pass a claim: `passing`
+/// of `seeds` (issue 6, "How it is checked"); `passing == seeds` for "every run".
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SeedRule {
+    pub passing: usize,
+    pub seeds: usize,
 }
 
 /// The run summary written to `DIR/summary.json`.

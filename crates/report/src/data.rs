@@ -65,10 +65,20 @@ impl Episode {
 }
 
 pub(crate) struct Claim {
+    /// Stable name of the claim (absent in summaries written before it existed).
+    pub id: Option<String>,
     pub claim: String,
     pub thesis: String,
     pub measured: String,
     pub pass: Option<bool>,
+    /// Acceptance rule: at least `passing` of `seeds` runs pass the claim.
+    pub across_seeds: Option<SeedRule>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct SeedRule {
+    pub passing: u64,
+    pub seeds: u64,
 }
 
 /// Peg-in-hole geometry of the arm experiments, metres.
@@ -99,9 +109,18 @@ pub(crate) struct Summary {
     /// `config.dt`, the fallback time step when there is no predictions.jsonl.
     pub config_dt: Option<f64>,
     pub thesis_reference: Option<Vec<Claim>>,
+    /// Arm runs: mean (k_x, k_y) of the last roll-out over the whole episode.
+    pub final_mean_gains: Option<[f64; 2]>,
 }
 
 impl Summary {
+    /// DIR/summary.json, the one file a run directory must have.
+    pub fn load(dir: &Path) -> Result<Summary, ReportError> {
+        let file = dir.join("summary.json");
+        let v = read_json(&file)?;
+        parse_summary(Node::root(&file, "", &v))
+    }
+
     /// "update k", "not solved", or a dash before the first update.
     pub fn solved_text(&self) -> String {
         match (self.solved_at_episode, self.episodes.is_empty()) {
@@ -167,9 +186,7 @@ pub(crate) struct Run {
 impl Run {
     pub fn load(dir: &Path) -> Result<Run, ReportError> {
         let mut notes = Vec::new();
-        let file = dir.join("summary.json");
-        let v = read_json(&file)?;
-        let summary = parse_summary(Node::root(&file, "", &v))?;
+        let summary = Summary::load(dir)?;
 
         let rollouts = match read_lines(&dir.join("rollouts.jsonl"), &mut notes)? {
             Some(lines) => Some(parse_lines(&lines, parse_rollout_line)?),
@@ -328,6 +345,7 @@ fn parse_summary(n: Node<'_>) -> Result<Summary, ReportError> {
         thesis_reference: n.with("thesis_reference", |t| {
             t.map(|t| t.map_array(parse_claim)).transpose()
         })?,
+        final_mean_gains: n.with("final_mean_gains", |g| g.map(parse_pair).transpose())?,
     })
 }
 
@@ -360,8 +378,12 @@ fn parse_geometry(n: Node<'_>) -> Result<Geometry, ReportError> {
 }
 
 fn parse_interval(n: Node<'_>) -> Result<(f64, f64), ReportError> {
+    parse_pair(n).map(|[a, b]| (a, b))
+}
+
+fn parse_pair(n: Node<'_>) -> Result<[f64; 2], ReportError> {
     match n.f64_vec()?.as_slice() {
-        &[a, b] => Ok((a, b)),
+        &[a, b] => Ok([a, b]),
         _ => Err(n.malformed("an array of two numbers")),
     }
 }
@@ -378,10 +400,20 @@ fn parse_claim(n: Node<'_>) -> Result<Claim, ReportError> {
         })
     };
     Ok(Claim {
+        id: n.opt_string("id")?.filter(|id| !id.is_empty()),
         claim: text("claim"),
         thesis: text("thesis"),
         measured: text("measured"),
         pass: n.opt_bool("pass")?,
+        across_seeds: n.with("across_seeds", |r| {
+            r.map(|r| {
+                Ok::<_, ReportError>(SeedRule {
+                    passing: r.req_u64("passing")?,
+                    seeds: r.req_u64("seeds")?,
+                })
+            })
+            .transpose()
+        })?,
     })
 }
 

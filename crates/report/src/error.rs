@@ -43,6 +43,19 @@ pub enum ReportError {
         file: PathBuf,
         error: std::io::Error,
     },
+    /// Two run directories of one experiment have the same seed, so the acceptance table
+    /// would count that seed twice.
+    #[error(
+        "{} and {}: both are {experiment} seed {seed}; give one run per seed",
+        first.display(),
+        second.display()
+    )]
+    DuplicateSeed {
+        experiment: String,
+        seed: u64,
+        first: PathBuf,
+        second: PathBuf,
+    },
     /// plotters failed while drawing an image.
     #[error("{}: drawing failed: {message}", file.display())]
     Plot { file: PathBuf, message: String },

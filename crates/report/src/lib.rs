@@ -13,7 +13,11 @@
 //! each as PNG and SVG, `report.html` with the settings, per-update results, the thesis
 //! comparison, totals and every PNG inlined, and `report.md` with the same tables as Markdown. Runs from before a file or field existed still
 //! get a report; what could not be drawn is listed in it.
+//!
+//! [`acceptance_markdown`] reads the summary.json of several runs and tabulates each thesis claim
+//! over the seeds with its acceptance verdict (issue 6).
 
+mod acceptance;
 mod data;
 mod error;
 mod figures;
@@ -28,6 +32,7 @@ mod synthetic;
 #[cfg(test)]
 mod tests;
 
+pub use acceptance::{acceptance_markdown, SIC_MEAN_K_Y_ABOVE_GIC};
 pub use error::ReportError;
 use std::path::{Path, PathBuf};
 

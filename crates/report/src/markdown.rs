@@ -6,15 +6,15 @@ use crate::data::{num, Colour, Run};
 use std::fmt::Write;
 
 /// A table cell: a `|` would end the cell and a line break the row.
-fn cell(s: &str) -> String {
+pub(crate) fn cell(s: &str) -> String {
     s.replace('|', "\\|").replace(['\n', '\r'], " ")
 }
 
-fn row(h: &mut String, cells: &[String]) {
+pub(crate) fn row(h: &mut String, cells: &[String]) {
     let _ = writeln!(h, "| {} |", cells.join(" | "));
 }
 
-fn header(h: &mut String, names: &[&str]) {
+pub(crate) fn header(h: &mut String, names: &[&str]) {
     let _ = writeln!(h, "| {} |", names.join(" | "));
     let _ = writeln!(h, "|{}", "---|".repeat(names.len()));
 }

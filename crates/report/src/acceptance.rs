@@ -1,0 +1,380 @@
+//! The acceptance table of issue 6: every thesis claim of each experiment, one column per seed,
+//! and whether enough seeds pass it (each claim's `across_seeds` rule, written by the run).
+//!
+//! Only summary.json is read. Claims are matched across runs by their `id` (their text for
+//! summaries written before ids existed). The one claim a run cannot decide alone, vil-sic's
+//! "mean k_y above the GIC run's", is decided here against a vil-gic run of the same seed.
+
+use crate::data::{Claim, SeedRule, Summary};
+use crate::markdown::{cell, header, row};
+use crate::ReportError;
+use std::collections::BTreeMap;
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+/// Id of the vil-sic claim decided here against the same seed's GIC run; the experiments crate
+/// gives its claim this id.
+pub const SIC_MEAN_K_Y_ABOVE_GIC: &str = "sic_mean_k_y_above_gic";
+
+struct RunSummary {
+    dir: PathBuf,
+    summary: Summary,
+}
+
+/// The acceptance verdict of one claim over the runs given.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Verdict {
+    Pass,
+    Fail,
+    Undecided,
+}
+
+impl Verdict {
+    fn name(self) -> &'static str {
+        match self {
+            Verdict::Pass => "pass",
+            Verdict::Fail => "fail",
+            Verdict::Undecided => "undecided",
+        }
+    }
+}
+
+/// Accepted once `rule.passing` runs pass; rejected once so many fail that the remaining
+/// seeds of `rule.seeds` could no longer reach it.
+pub(crate) fn verdict(rule: SeedRule, passes: u64, fails: u64) -> Verdict {
+    if passes >= rule.passing {
+        Verdict::Pass
+    } else if fails > rule.seeds.saturating_sub(rule.passing) {
+        Verdict::Fail
+    } else {
+        Verdict::Undecided
+    }
+}
+
+/// Markdown: one section per experiment (sorted by name), runs sorted by seed.
+pub fn acceptance_markdown(dirs: &[PathBuf]) -> Result<String, ReportError> {
+    let mut by_experiment: BTreeMap<String, Vec<RunSummary>> = BTreeMap::new();
+    for dir in dirs {
+        let summary = Summary::load(dir)?;
+        let runs = by_experiment.entry(summary.experiment.clone()).or_default();
+        if let Some(other) = runs.iter().find(|r| r.summary.seed == summary.seed) {
+            return Err(ReportError::DuplicateSeed {
+                experiment: summary.experiment,
+                seed: summary.seed,
+                first: other.dir.clone(),
+                second: dir.clone(),
+            });
+        }
+        runs.push(RunSummary {
+            dir: dir.clone(),
+            summary,
+        });
+    }
+    let mut h = String::new();
+    for runs in by_experiment.values_mut() {
+        runs.sort_by_key(|r| r.summary.seed);
+    }
+    for (experiment, runs) in &by_experiment {
+        section(&mut h, experiment, runs, &by_experiment);
+    }
+    if h.is_empty() {
+        h.push_str("No run directories given.\n");
+    }
+    Ok(h)
+}
+
+fn claim_key(c: &Claim) -> &str {
+    c.id.as_deref().unwrap_or(&c.claim)
+}
+
+fn section(
+    h: &mut String,
+    experiment: &str,
+    runs: &[RunSummary],
+    all: &BTreeMap<String, Vec<RunSummary>>,
+) {
+    let _ = writeln!(h, "## {experiment}\n");
+    for r in runs {
+        let _ = writeln!(
+            h,
+            "- seed {}: `{}`, {} policy updates",
+            r.summary.seed,
+            display(&r.dir),
+            r.summary.episodes.len()
+        );
+    }
+    h.push('\n');
+    // Claims in the order the runs list them, each once.
+    let mut keys: Vec<(&str, &Claim)> = Vec::new();
+    for r in runs {
+        for c in r.summary.thesis_reference.iter().flatten() {
+            if !keys.iter().any(|(k, _)| *k == claim_key(c)) {
+                keys.push((claim_key(c), c));
+            }
+        }
+    }
+    if keys.is_empty() {
+        h.push_str("These runs record no thesis claims (a run writes them when it stops).\n\n");
+        return;
+    }
+    let mut names = vec!["claim".to_string(), "needs".to_string()];
+    names.extend(runs.iter().map(|r| format!("seed {}", r.summary.seed)));
+    names.extend(["passing".into(), "verdict".into()]);
+    header(h, &names.iter().map(String::as_str).collect::<Vec<_>>());
+    for (key, first) in keys {
+        let rule = runs
+            .iter()
+            .flat_map(|r| r.summary.thesis_reference.iter().flatten())
+            .find(|c| claim_key(c) == key)
+            .and_then(|c| c.across_seeds);
+        let mut cells = vec![cell(&first.claim), rule.map_or("–".into(), rule_text)];
+        let (mut passes, mut fails) = (0, 0);
+        for r in runs {
+            let claim = r
+                .summary
+                .thesis_reference
+                .iter()
+                .flatten()
+                .find(|c| claim_key(c) == key);
+            let (measured, pass) = match claim {
+                None => ("–".to_string(), None),
+                Some(_) if key == SIC_MEAN_K_Y_ABOVE_GIC => paired_gic_k_y(&r.summary, all),
+                Some(c) => (c.measured.clone(), c.pass),
+            };
+            match pass {
+                Some(true) => passes += 1,
+                Some(false) => fails += 1,
+                None => {}
+            }
+            let mark = match pass {
+                Some(true) => "pass",
+                Some(false) => "fail",
+                None => "undecided",
+            };
+            cells.push(format!("{} ({mark})", cell(&measured)));
+        }
+        cells.push(format!("{passes} of {}", runs.len()));
+        cells.push(rule.map_or("– (rule not recorded)".into(), |rule| {
+            verdict(rule, passes, fails).name().into()
+        }));
+        row(h, &cells);
+    }
+    h.push('\n');
+}
+
+/// SIC's whole-episode mean k_y against the GIC run of the same seed (vil-gic-rbf10 first, then
+/// the other GIC configurations by name), decided only when both were recorded.
+fn paired_gic_k_y(
+    sic: &Summary,
+    all: &BTreeMap<String, Vec<RunSummary>>,
+) -> (String, Option<bool>) {
+    let Some(sic_gains) = sic.final_mean_gains else {
+        return ("SIC run has no final_mean_gains".into(), None);
+    };
+    let preferred = ["vil-gic-rbf10", "vil-gic"];
+    let mut gic_names: Vec<&String> = all.keys().filter(|k| k.starts_with("vil-gic")).collect();
+    gic_names.sort_by_key(|k| (!preferred.contains(&k.as_str()), k.as_str()));
+    let paired = gic_names.iter().find_map(|name| {
+        all[*name]
+            .iter()
+            .find(|r| r.summary.seed == sic.seed)
+            .and_then(|r| r.summary.final_mean_gains.map(|g| (name, g)))
+    });
+    match paired {
+        Some((name, gic)) => (
+            format!(
+                "{:.0} vs {:.0} N/m ({name} seed {})",
+                sic_gains[1], gic[1], sic.seed
+            ),
+            Some(sic_gains[1] > gic[1]),
+        ),
+        None => (
+            format!(
+                "{:.0} N/m; no vil-gic run of seed {} given",
+                sic_gains[1], sic.seed
+            ),
+            None,
+        ),
+    }
+}
+
+fn rule_text(rule: SeedRule) -> String {
+    if rule.passing == rule.seeds {
+        format!("every run ({} seeds)", rule.seeds)
+    } else {
+        format!("{} of {} seeds", rule.passing, rule.seeds)
+    }
+}
+
+fn display(p: &Path) -> String {
+    p.display().to_string().replace('`', "'")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synthetic::TempDir;
+    use serde_json::{json, Value};
+
+    const THREE_OF_FIVE: SeedRule = SeedRule {
+        passing: 3,
+        seeds: 5,
+    };
+    const EVERY_RUN: SeedRule = SeedRule {
+        passing: 5,
+        seeds: 5,
+    };
+
+    #[test]
+    fn verdicts_follow_the_seed_rules() {
+        assert_eq!(verdict(THREE_OF_FIVE, 3, 0), Verdict::Pass);
+        assert_eq!(verdict(THREE_OF_FIVE, 3, 2), Verdict::Pass);
+        assert_eq!(verdict(THREE_OF_FIVE, 2, 2), Verdict::Undecided);
+        assert_eq!(verdict(THREE_OF_FIVE, 2, 3), Verdict::Fail);
+        assert_eq!(verdict(THREE_OF_FIVE, 0, 0), Verdict::Undecided);
+        assert_eq!(verdict(EVERY_RUN, 4, 0), Verdict::Undecided);
+        assert_eq!(verdict(EVERY_RUN, 4, 1), Verdict::Fail);
+        assert_eq!(verdict(EVERY_RUN, 5, 0), Verdict::Pass);
+    }
+
+    fn claim(id: &str, text: &str, measured: &str, pass: Option<bool>, every: bool) -> Value {
+        let seeds = 5;
+        let passing = if every { 5 } else { 3 };
+        json!({"id": id, "claim": text, "thesis": "t", "measured": measured, "pass": pass,
+               "across_seeds": {"passing": passing, "seeds": seeds}})
+    }
+
+    fn write_summary(
+        root: &Path,
+        name: &str,
+        experiment: &str,
+        seed: u64,
+        k_y: f64,
+        claims: Vec<Value>,
+    ) -> PathBuf {
+        let dir = root.join(name);
+        std::fs::create_dir_all(&dir).unwrap();
+        let summary = json!({"experiment": experiment, "seed": seed, "episodes": [],
+                             "final_mean_gains": [150.0, k_y], "thesis_reference": claims});
+        std::fs::write(dir.join("summary.json"), summary.to_string()).unwrap();
+        dir
+    }
+
+    fn sic_claims(final_return: f64) -> Vec<Value> {
+        vec![
+            claim(
+                "sic_final_return",
+                "final return <= 90",
+                &format!("{final_return:.1}"),
+                Some(final_return <= 90.0),
+                false,
+            ),
+            claim(
+                SIC_MEAN_K_Y_ABOVE_GIC,
+                "mean k_y above GIC's",
+                "n/a",
+                None,
+                false,
+            ),
+            claim("final_below", "final below initial", "x", Some(true), true),
+        ]
+    }
+
+    /// The table row whose first cell is `claim`, split into its cells.
+    fn row_of(md: &str, claim: &str) -> Vec<String> {
+        let line = md
+            .lines()
+            .find(|l| l.starts_with(&format!("| {claim} |")))
+            .unwrap_or_else(|| panic!("no row {claim} in\n{md}"));
+        line.trim_matches('|')
+            .split(" | ")
+            .map(|c| c.trim().to_string())
+            .collect()
+    }
+
+    #[test]
+    fn table_counts_seeds_and_pairs_sic_with_the_same_seeds_gic_run() {
+        let tmp = TempDir::new("acceptance");
+        let root = tmp.path();
+        let dirs = vec![
+            write_summary(root, "sic3", "vil-sic", 3, 240.0, sic_claims(95.0)),
+            write_summary(root, "sic1", "vil-sic", 1, 270.0, sic_claims(72.5)),
+            write_summary(root, "sic2", "vil-sic", 2, 120.0, sic_claims(80.0)),
+            // Seed 1 has two GIC runs: rbf10 is the comparison, not rbf25.
+            write_summary(root, "rbf25-1", "vil-gic-rbf25", 1, 300.0, vec![]),
+            write_summary(root, "rbf10-1", "vil-gic-rbf10", 1, 200.0, vec![]),
+            write_summary(root, "rbf25-2", "vil-gic-rbf25", 2, 130.0, vec![]),
+        ];
+        let md = acceptance_markdown(&dirs).unwrap();
+        assert!(md.contains("## vil-sic"), "{md}");
+        assert!(md.contains("| claim | needs | seed 1 | seed 2 | seed 3 | passing | verdict |"));
+        assert_eq!(
+            row_of(&md, "final return <= 90"),
+            [
+                "final return <= 90",
+                "3 of 5 seeds",
+                "72.5 (pass)",
+                "80.0 (pass)",
+                "95.0 (fail)",
+                "2 of 3",
+                "undecided"
+            ]
+        );
+        assert_eq!(
+            row_of(&md, "mean k_y above GIC's"),
+            [
+                "mean k_y above GIC's",
+                "3 of 5 seeds",
+                "270 vs 200 N/m (vil-gic-rbf10 seed 1) (pass)",
+                "120 vs 130 N/m (vil-gic-rbf25 seed 2) (fail)",
+                "240 N/m; no vil-gic run of seed 3 given (undecided)",
+                "1 of 3",
+                "undecided"
+            ]
+        );
+        let every = row_of(&md, "final below initial");
+        assert_eq!(every[1], "every run (5 seeds)");
+        assert_eq!(every[5..], ["3 of 3", "undecided"]);
+        assert!(
+            md.contains("## vil-gic-rbf10") && md.contains("These runs record no thesis claims")
+        );
+    }
+
+    #[test]
+    fn two_runs_of_one_seed_are_refused() {
+        let tmp = TempDir::new("acceptance-dup");
+        let a = write_summary(tmp.path(), "a", "vil-sic", 1, 1.0, vec![]);
+        let b = write_summary(tmp.path(), "b", "vil-sic", 1, 1.0, vec![]);
+        let err = acceptance_markdown(&[a, b]).unwrap_err();
+        assert!(
+            matches!(err, ReportError::DuplicateSeed { seed: 1, .. }),
+            "{err}"
+        );
+        assert!(err.to_string().contains("vil-sic seed 1"), "{err}");
+    }
+
+    #[test]
+    fn old_summaries_match_by_text_and_leave_the_verdict_open() {
+        let tmp = TempDir::new("acceptance-old");
+        let old = vec![
+            json!({"claim": "every roll-out of updates 6-10 inserts", "thesis": "t",
+                              "measured": "5/5", "pass": true}),
+        ];
+        let dirs: Vec<PathBuf> = (1..=3)
+            .map(|s| {
+                write_summary(
+                    tmp.path(),
+                    &format!("r{s}"),
+                    "vil-gic-rbf10",
+                    s,
+                    1.0,
+                    old.clone(),
+                )
+            })
+            .collect();
+        let md = acceptance_markdown(&dirs).unwrap();
+        let row = row_of(&md, "every roll-out of updates 6-10 inserts");
+        assert_eq!(row[1], "–");
+        assert_eq!(row[5..], ["3 of 3", "– (rule not recorded)"]);
+    }
+}
