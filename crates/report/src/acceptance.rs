@@ -127,7 +127,7 @@ fn section(
             .flat_map(|r| r.summary.thesis_reference.iter().flatten())
             .find(|c| claim_key(c) == key)
             .and_then(|c| c.across_seeds);
-        let mut cells = vec![cell(&first.claim), rule.map_or("–".into(), rule_text)];
+        let mut cells = vec![cell(&first.claim), rule_text(rule)];
         let (mut passes, mut fails) = (0, 0);
         for r in runs {
             let claim = r
@@ -198,11 +198,12 @@ fn paired_gic_k_y(
     }
 }
 
-fn rule_text(rule: SeedRule) -> String {
-    if rule.passing == rule.seeds {
-        format!("every run ({} seeds)", rule.seeds)
-    } else {
-        format!("{} of {} seeds", rule.passing, rule.seeds)
+/// "3 of 5 seeds", "every run (5 seeds)", or a dash for summaries that predate the rules.
+pub(crate) fn rule_text(rule: Option<SeedRule>) -> String {
+    match rule {
+        Some(r) if r.passing == r.seeds => format!("every run ({} seeds)", r.seeds),
+        Some(r) => format!("{} of {} seeds", r.passing, r.seeds),
+        None => "–".into(),
     }
 }
 

@@ -246,7 +246,7 @@ fn thesis(h: &mut String, run: &Run) {
     }
     h.push_str(
         "<table class=\"thesis\">\n<thead><tr><th>claim</th><th>thesis</th><th>measured</th>\
-         <th>verdict</th></tr></thead>\n<tbody>\n",
+         <th>verdict</th><th>accepted when</th></tr></thead>\n<tbody>\n",
     );
     for c in claims {
         let (class, verdict) = match c.pass {
@@ -256,10 +256,12 @@ fn thesis(h: &mut String, run: &Run) {
         };
         let _ = writeln!(
             h,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td class=\"{class}\">{verdict}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td class=\"{class}\">{verdict}</td>\
+             <td>{}</td></tr>",
             esc(&c.claim),
             esc(&c.thesis),
-            esc(&c.measured)
+            esc(&c.measured),
+            esc(&crate::acceptance::rule_text(c.across_seeds))
         );
     }
     h.push_str("</tbody></table>\n");

@@ -99,7 +99,10 @@ fn thesis(h: &mut String, run: &Run) {
         h.push_str("No thesis claims apply to this experiment yet.\n\n");
         return;
     }
-    header(h, &["claim", "thesis", "measured", "verdict"]);
+    header(
+        h,
+        &["claim", "thesis", "measured", "verdict", "accepted when"],
+    );
     for c in claims {
         let verdict = match c.pass {
             Some(true) => "pass",
@@ -113,6 +116,7 @@ fn thesis(h: &mut String, run: &Run) {
                 cell(&c.thesis),
                 cell(&c.measured),
                 verdict.into(),
+                crate::acceptance::rule_text(c.across_seeds),
             ],
         );
     }

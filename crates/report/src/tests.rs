@@ -366,6 +366,8 @@ fn markdown_report_has_a_row_per_update_and_every_claim() {
     let verdicts: Vec<&str> = claims.iter().map(|r| r[3]).collect();
     assert_eq!(verdicts, ["pass", "fail", "undecided"]);
     assert_eq!(claims[1][2], "31.2");
+    let rules: Vec<&str> = claims.iter().map(|r| r[4]).collect();
+    assert_eq!(rules, ["3 of 5 seeds", "–", "–"]);
 
     let totals = md_rows(&page, "## Totals");
     let value = |k: &str| totals.iter().find(|r| r[0] == k).map(|r| r[1]).unwrap();
