@@ -149,6 +149,25 @@ pub(crate) struct Rollout {
     pub true_states: Rows,
 }
 
+impl Rollout {
+    /// Mean and population std of action component `j` over the roll-out; `None` without
+    /// actions or when the rows are shorter than `j + 1`.
+    pub fn action_mean_std(&self, j: usize) -> Option<(f64, f64)> {
+        let v: Vec<f64> = self
+            .actions
+            .iter()
+            .map(|a| a.get(j).copied())
+            .collect::<Option<_>>()?;
+        if v.is_empty() {
+            return None;
+        }
+        let n = v.len() as f64;
+        let mean = v.iter().sum::<f64>() / n;
+        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
+        Some((mean, var.sqrt()))
+    }
+}
+
 /// One predicted step; `t` is the time at the end of the step and `mean`/`var` describe the
 /// state there, while the action fields describe the action applied during the step.
 pub(crate) struct PredStep {

@@ -61,6 +61,12 @@ fn episodes(h: &mut String, run: &Run) {
     if gp {
         names.push("GP points");
     }
+    // Arm runs: each gain's mean ± std over the roll-out; a std of 0 is a policy output that
+    // has died at the middle of its range (EXPERIMENTS.md, "The RBF policy's k_x output dies").
+    let gains = arm && run.rollouts.is_some();
+    if gains {
+        names.extend(["k_x mean ± std (N/m)", "k_y mean ± std (N/m)"]);
+    }
     header(h, &names);
     for e in eps {
         let mut cells = vec![
@@ -83,6 +89,16 @@ fn episodes(h: &mut String, run: &Run) {
                 (Some(n), _) => n.to_string(),
                 (None, _) => "–".into(),
             });
+        }
+        if gains {
+            let rollout = run.rollout_of(e.index);
+            for j in 0..2 {
+                cells.push(
+                    rollout
+                        .and_then(|r| r.action_mean_std(j))
+                        .map_or_else(|| "–".into(), |(m, sd)| format!("{m:.1} ± {sd:.1}")),
+                );
+            }
         }
         row(h, &cells);
     }

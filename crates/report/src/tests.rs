@@ -344,8 +344,27 @@ fn markdown_report_has_a_row_per_update_and_every_claim() {
     let eps = summary["episodes"].as_array().unwrap();
     let rows = md_rows(&page, "## Policy updates");
     assert_eq!(rows.len(), eps.len());
+    let rollouts: Vec<Value> = std::fs::read_to_string(tmp.path().join("rollouts.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
     for (row, e) in rows.iter().zip(eps) {
-        assert_eq!(row.len(), 10, "{row:?}");
+        assert_eq!(row.len(), 12, "{row:?}");
+        let r = rollouts
+            .iter()
+            .find(|r| r["episode"] == e["index"])
+            .expect("a roll-out per update");
+        let k_x: Vec<f64> = r["rollout"]["actions"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|a| a[0].as_f64().unwrap())
+            .collect();
+        let mean = k_x.iter().sum::<f64>() / k_x.len() as f64;
+        let sd = (k_x.iter().map(|k| (k - mean).powi(2)).sum::<f64>() / k_x.len() as f64).sqrt();
+        assert!(sd > 0.0, "the synthetic gains vary");
+        assert_eq!(row[10], format!("{mean:.1} ± {sd:.1}"));
         assert_eq!(row[0], e["index"].to_string());
         assert_eq!(
             row[2],
@@ -395,4 +414,22 @@ fn markdown_report_of_a_classic_run_has_no_arm_columns_and_escapes_pipes() {
     );
     assert!(!page.contains("final x"));
     assert!(page.contains("| a \\| b c |"), "{page}");
+}
+
+#[test]
+fn action_statistics_of_a_constant_gain_and_of_missing_components() {
+    let r = crate::data::Rollout {
+        episode: 1,
+        costs: None,
+        actions: vec![vec![252.5, 10.0], vec![252.5, 30.0]],
+        true_states: Vec::new(),
+    };
+    assert_eq!(r.action_mean_std(0), Some((252.5, 0.0)));
+    assert_eq!(r.action_mean_std(1), Some((20.0, 10.0)));
+    assert_eq!(r.action_mean_std(2), None);
+    let empty = crate::data::Rollout {
+        actions: Vec::new(),
+        ..r
+    };
+    assert_eq!(empty.action_mean_std(0), None);
 }
