@@ -342,6 +342,17 @@ mod tests {
     }
 
     #[test]
+    fn an_impossible_seed_rule_is_an_error_naming_the_field() {
+        let tmp = TempDir::new("acceptance-rule");
+        let mut bad = claim("x", "x", "1", Some(true), false);
+        bad["across_seeds"]["passing"] = json!(6);
+        let dir = write_summary(tmp.path(), "a", "vil-sic", 1, 1.0, vec![bad]);
+        let err = acceptance_markdown(&[dir]).unwrap_err();
+        assert!(matches!(err, ReportError::Malformed { .. }), "{err}");
+        assert!(err.to_string().contains("across_seeds"), "{err}");
+    }
+
+    #[test]
     fn two_runs_of_one_seed_are_refused() {
         let tmp = TempDir::new("acceptance-dup");
         let a = write_summary(tmp.path(), "a", "vil-sic", 1, 1.0, vec![]);

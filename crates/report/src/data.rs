@@ -424,16 +424,19 @@ fn parse_claim(n: Node<'_>) -> Result<Claim, ReportError> {
         thesis: text("thesis"),
         measured: text("measured"),
         pass: n.opt_bool("pass")?,
-        across_seeds: n.with("across_seeds", |r| {
-            r.map(|r| {
-                Ok::<_, ReportError>(SeedRule {
-                    passing: r.req_u64("passing")?,
-                    seeds: r.req_u64("seeds")?,
-                })
-            })
-            .transpose()
-        })?,
+        across_seeds: n.with("across_seeds", |r| r.map(parse_seed_rule).transpose())?,
     })
+}
+
+fn parse_seed_rule(r: Node<'_>) -> Result<SeedRule, ReportError> {
+    let rule = SeedRule {
+        passing: r.req_u64("passing")?,
+        seeds: r.req_u64("seeds")?,
+    };
+    if rule.passing == 0 || rule.passing > rule.seeds {
+        return Err(r.malformed("{passing, seeds} with 1 <= passing <= seeds"));
+    }
+    Ok(rule)
 }
 
 /// Rows of numbers, one per step: actions or states.
