@@ -30,7 +30,16 @@ pub(crate) enum Verdict {
 }
 
 impl Verdict {
-    fn name(self) -> &'static str {
+    /// One run's verdict on a claim (`pass` as summary.json records it).
+    pub fn of_run(pass: Option<bool>) -> Verdict {
+        match pass {
+            Some(true) => Verdict::Pass,
+            Some(false) => Verdict::Fail,
+            None => Verdict::Undecided,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
         match self {
             Verdict::Pass => "pass",
             Verdict::Fail => "fail",
@@ -146,11 +155,7 @@ fn section(
                 Some(false) => fails += 1,
                 None => {}
             }
-            let mark = match pass {
-                Some(true) => "pass",
-                Some(false) => "fail",
-                None => "undecided",
-            };
+            let mark = Verdict::of_run(pass).name();
             cells.push(format!("{} ({mark})", cell(&measured)));
         }
         cells.push(format!("{passes} of {}", runs.len()));

@@ -120,11 +120,7 @@ fn thesis(h: &mut String, run: &Run) {
         &["claim", "thesis", "measured", "verdict", "accepted when"],
     );
     for c in claims {
-        let verdict = match c.pass {
-            Some(true) => "pass",
-            Some(false) => "fail",
-            None => "undecided",
-        };
+        let verdict = crate::acceptance::Verdict::of_run(c.pass).name();
         row(
             h,
             &[
