@@ -348,7 +348,10 @@ pub fn setup<P>(
             mfepls: cfg.optimiser.mfepls,
             memory: cfg.optimiser.memory,
             wolfe: Wolfe::PILCO,
-            scale_params: cfg.optimiser.scale_params,
+            scale_params: cfg
+                .optimiser
+                .scale_params
+                .then(|| cfg.optimiser.centre_scale.unwrap_or_default()),
         },
         initial_rollouts: 1,
         episodes: cfg.episodes,

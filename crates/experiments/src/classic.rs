@@ -162,7 +162,7 @@ where
             memory: scn.opt_memory,
             wolfe: Wolfe::PILCO,
             // PILCO's scenarios are in units where the raw parameters are well scaled.
-            scale_params: false,
+            scale_params: None,
         },
         initial_rollouts: scn.initial_rollouts,
         episodes: scn.policy_updates,

@@ -8,6 +8,7 @@
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use vicpilco_env::arm::ControllerKind;
+pub use vicpilco_pilco::policy::CentreScale;
 
 /// The shipped configs: (name, file text). `vil-gic` is an alias of `vil-gic-rbf10`.
 pub const CONFIGS: &[(&str, &str)] = &[
@@ -145,6 +146,12 @@ pub struct OptimiserConfig {
     /// thrown out of the workspace by the first steps.
     #[serde(default)]
     pub scale_params: bool,
+    /// With `scale_params`, which of the outputs' length-scales measures a centre coordinate
+    /// (ours): `"geometric-mean"` (the default) or `"smallest"`, which keeps every step within
+    /// one length-scale of the narrowest output (see EXPERIMENTS.md, "The RBF policy's k_x
+    /// output dies").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub centre_scale: Option<CentreScale>,
 }
 
 /// Where the relative targets' prior mean comes from.
@@ -372,6 +379,13 @@ impl ArmExperiment {
         c.at_least("optimiser.length", o.length as usize, 1)?;
         c.at_least("optimiser.mfepls", o.mfepls as usize, 1)?;
         c.at_least("optimiser.memory", o.memory, 1)?;
+        if !o.scale_params || p.kind != PolicyKind::Rbf {
+            c.forbid(
+                "optimiser.centre_scale",
+                &o.centre_scale,
+                "without an RBF policy and optimiser.scale_params = true",
+            )?;
+        }
         let g = &self.gp;
         c.at_least("gp.sparse_threshold", g.sparse_threshold, 1)?;
         c.at_least("gp.n_inducing", g.n_inducing, 1)?;
@@ -459,6 +473,9 @@ impl ArmExperiment {
         ];
         if self.policy.kind == PolicyKind::Rbf {
             keys.extend(["policy.lengthscales", "optimiser.scale_params"]);
+            if self.optimiser.centre_scale.is_some() {
+                keys.push("optimiser.centre_scale");
+            }
         }
         if self.controller == ControllerKind::Sic && self.policy.kind == PolicyKind::Rbf {
             keys.push("policy.n_basis");

@@ -161,3 +161,21 @@ fn out_of_range_values_are_errors_naming_the_key() {
     let e = error_of(&vilta.replace("delta_max = 0.0025 ", "# "));
     assert!(e.contains("policy.delta_max"), "{e}");
 }
+
+#[test]
+fn the_centre_scale_rule_parses_and_needs_scaled_parameters() {
+    use vicpilco_experiments::config::CentreScale;
+    let text = config::shipped("vil-gic").unwrap().1;
+    assert_eq!(shipped("vil-gic").optimiser.centre_scale, None);
+    let smallest = text.replace(
+        "scale_params = true",
+        "scale_params = true\ncentre_scale = \"smallest\"",
+    );
+    let cfg = config::parse(&smallest, "test.toml").unwrap();
+    assert_eq!(cfg.optimiser.centre_scale, Some(CentreScale::Smallest));
+    assert!(cfg.ours_keys().contains(&"optimiser.centre_scale"));
+    let e = error_of(&smallest.replace("\"smallest\"", "\"largest\""));
+    assert!(e.contains("test.toml") && e.contains("largest"), "{e}");
+    let e = error_of(&smallest.replace("scale_params = true", "scale_params = false"));
+    assert!(e.contains("optimiser.centre_scale"), "{e}");
+}

@@ -17,7 +17,7 @@ use vicpilco_gp::moments::MmModel;
 use vicpilco_gp::train::initial_hyper;
 use vicpilco_gp::train::{minimize, MinimizeOptions, Termination, Wolfe};
 use vicpilco_gp::{DynamicsModel, DynamicsOptions, Hyper};
-use vicpilco_pilco::policy::Policy;
+use vicpilco_pilco::policy::{CentreScale, Policy};
 use vicpilco_pilco::squash::{PartialSat, TrigAug};
 
 /// PILCO's policy-optimisation budget.
@@ -31,10 +31,10 @@ pub struct OptimiserOptions {
     pub memory: usize,
     /// Line-search acceptance ([`Wolfe::PILCO`]: PILCO's more exact line searches).
     pub wolfe: Wolfe,
-    /// Search over `ψ / scale` with the policy's [`Policy::param_scales`], taken at the start
-    /// of each update (ours; `false`: PILCO's raw parameters). The objective is the same
-    /// function; only the optimiser's steps change.
-    pub scale_params: bool,
+    /// Search over `ψ / scale` with the policy's [`Policy::param_scales`] for this rule,
+    /// taken at the start of each update (ours; `None`: PILCO's raw parameters). The
+    /// objective is the same function; only the optimiser's steps change.
+    pub scale_params: Option<CentreScale>,
 }
 
 /// What the loop does between roll-outs, reported to an observer.
@@ -372,10 +372,9 @@ where
             let mm = MmModel::dynamics(&model);
             let base = self.policy.clone();
             let mut candidate = base.clone();
-            let scales = if self.optimiser.scale_params {
-                base.param_scales()
-            } else {
-                vec![1.0; base.n_params()]
+            let scales = match self.optimiser.scale_params {
+                Some(rule) => base.param_scales(rule),
+                None => vec![1.0; base.n_params()],
             };
             // The optimiser sees q = ψ / scale: J(q) = J(scale ⊙ q), dJ/dq = scale ⊙ dJ/dψ.
             let unscale =

@@ -84,29 +84,34 @@ fn linear_policy_moments_and_flat_order() {
 
 #[test]
 fn rbf_param_scales_put_centres_in_length_scale_units() {
-    use vicpilco_pilco::policy::RbfPolicy;
+    use vicpilco_pilco::policy::{CentreScale, RbfPolicy};
     let (n, d, e) = (3, 2, 2);
     let centres = Mat::from_fn(n, d, |i, c| 10.0 + (i * d + c) as f64);
     let targets = Mat::from_fn(n, e, |i, a| 0.1 * (i + a) as f64);
-    // ℓ for input 0: 0.1 and 0.4 (geometric mean 0.2); input 1: 2 and 2.
+    // ℓ for input 0: 0.1 and 0.4 (geometric mean 0.2, smallest 0.1); input 1: 2 and 2.
     let log_ls = Mat::from_fn(d, e, |c, a| match (c, a) {
         (0, 0) => 0.1f64.ln(),
         (0, _) => 0.4f64.ln(),
         _ => 2.0f64.ln(),
     });
     let pol = RbfPolicy::new(centres.clone(), targets, log_ls.as_ref(), 100.0).unwrap();
-    let (p, scales) = (pol.params(), pol.param_scales());
-    assert_eq!(scales.len(), pol.n_params());
-    for (k, (&pk, &sk)) in p.iter().zip(&scales).enumerate() {
-        // Exactly the centre entries (values ≥ 10 here) are scaled, each by its input's ℓ.
-        let centre = (0..n)
-            .flat_map(|i| (0..d).map(move |c| (i, c)))
-            .find(|&(i, c)| centres[(i, c)] == pk);
-        match centre {
-            Some((_, 0)) => assert!((sk - 0.2).abs() < 1e-12, "entry {k}: {sk}"),
-            Some((_, _)) => assert!((sk - 2.0).abs() < 1e-12, "entry {k}: {sk}"),
-            None => assert_eq!(sk, 1.0, "entry {k}"),
+    let p = pol.params();
+    for (rule, input0) in [
+        (CentreScale::GeometricMean, 0.2),
+        (CentreScale::Smallest, 0.1),
+    ] {
+        let scales = pol.param_scales(rule);
+        assert_eq!(scales.len(), pol.n_params());
+        for (k, (&pk, &sk)) in p.iter().zip(&scales).enumerate() {
+            // Exactly the centre entries (values ≥ 10 here) are scaled, each by its input's ℓ.
+            let centre = (0..n)
+                .flat_map(|i| (0..d).map(move |c| (i, c)))
+                .find(|&(i, c)| centres[(i, c)] == pk);
+            match centre {
+                Some((_, 0)) => assert!((sk - input0).abs() < 1e-12, "{rule:?} {k}: {sk}"),
+                Some((_, _)) => assert!((sk - 2.0).abs() < 1e-12, "{rule:?} {k}: {sk}"),
+                None => assert_eq!(sk, 1.0, "{rule:?} entry {k}"),
+            }
         }
     }
-    assert_eq!(scales.iter().filter(|&&s| s != 1.0).count(), n * d);
 }

@@ -17,6 +17,22 @@ pub use rbf::{RbfPolicy, DEFAULT_SNR};
 
 use crate::{GaussianBar, Moments, MomentsBar, Result};
 use faer::MatRef;
+use serde::{Deserialize, Serialize};
+
+/// Which length-scale an RBF centre coordinate is measured in when the optimiser searches over
+/// scaled parameters ([`Policy::param_scales`]). The centres are shared by all outputs while
+/// each output has its own length-scales, so one value per input has to be chosen.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CentreScale {
+    /// The geometric mean over the outputs: every output's steps are equally (mis)sized.
+    #[default]
+    GeometricMean,
+    /// The smallest over the outputs: a unit step moves a centre by at most one length-scale
+    /// of the output with the narrowest basis functions, so no step can carry the centres
+    /// out of that output's reach (where its basis functions and their gradient vanish).
+    Smallest,
+}
 
 /// A policy on Gaussian inputs, with reverse-mode derivatives.
 ///
@@ -57,9 +73,11 @@ pub trait Policy {
 
     /// A typical size of each parameter (same order as [`Policy::params`]), for an optimiser
     /// that should see every parameter on a comparable scale: it may search over `p / scale`
-    /// instead of `p`. The policy itself is unchanged. Default: all ones (PILCO's raw
+    /// instead of `p`. The policy itself is unchanged. `centres` says which length-scale
+    /// measures a centre (policies without centres ignore it). Default: all ones (PILCO's raw
     /// parameters).
-    fn param_scales(&self) -> Vec<f64> {
+    fn param_scales(&self, centres: CentreScale) -> Vec<f64> {
+        let _ = centres;
         vec![1.0; self.n_params()]
     }
 }

@@ -9,7 +9,7 @@
 //! gradient is 0 and [`Policy::set_params`] resets them. The number of *learnable* parameters,
 //! `N(D+E) + D·E` (thesis §4-3), is [`RbfPolicy::n_free_params`].
 
-use super::Policy;
+use super::{CentreScale, Policy};
 use crate::error::{PilcoError, Result};
 use crate::{GaussianBar, Moments, MomentsBar};
 use faer::{Mat, MatRef};
@@ -108,17 +108,21 @@ impl Policy for RbfPolicy {
         p
     }
 
-    /// Centres in units of the current length-scales (per input, the geometric mean over the
-    /// outputs); everything else 1. Why: a centre's gradient grows like 1/ℓ², and with inputs
-    /// in metres and ℓ ≈ 0.1 m an unscaled step throws centres metres away from every visited
-    /// state, where the basis function and its gradient vanish for good.
-    fn param_scales(&self) -> Vec<f64> {
+    /// Centres in units of the current length-scales (per input, the outputs' length-scales
+    /// combined as `centres` says); everything else 1. Why: a centre's gradient grows like
+    /// 1/ℓ², and with inputs in metres and ℓ ≈ 0.1 m an unscaled step throws centres metres
+    /// away from every visited state, where the basis function and its gradient vanish for good.
+    fn param_scales(&self, centres: CentreScale) -> Vec<f64> {
         let (n, d, e) = (self.gp.n(), self.gp.input_dim(), self.gp.output_dim());
         let mut scales = vec![1.0; self.n_params()];
         let off = (d + 2) * e;
         for c in 0..d {
-            let mean_log_ls = self.gp.hyp().iter().map(|h| h.log_ls[c]).sum::<f64>() / e as f64;
-            scales[off + c * n..off + (c + 1) * n].fill(mean_log_ls.exp());
+            let log_ls = self.gp.hyp().iter().map(|h| h.log_ls[c]);
+            let log_scale = match centres {
+                CentreScale::GeometricMean => log_ls.sum::<f64>() / e as f64,
+                CentreScale::Smallest => log_ls.fold(f64::INFINITY, f64::min),
+            };
+            scales[off + c * n..off + (c + 1) * n].fill(log_scale.exp());
         }
         scales
     }
