@@ -3,11 +3,12 @@
 //! Why: in the VIL runs a policy predicted at 60 ± 5 and confirmed by its roll-out was, one
 //! update later, predicted at 70–75 ± 20 by the model retrained on that confirming roll-out.
 //! This replays a run's model training (warm-started chain, as the learning loop does) on its
-//! recorded roll-outs 0..K for K in FROM..=TO and prints, for the run's final policy, the
-//! predicted return (mean ± std of the summed immediate cost, and the objective J) and the Δẋ
-//! model's hyper-parameters, so training settings can be compared by their stability.
+//! recorded roll-outs 0..K for K in FROM..=TO and prints, for one policy of the run (the final
+//! one, or the one update U rolled out, from `policies.jsonl`), the predicted return (mean ±
+//! std of the summed immediate cost, and the objective J) and the Δẋ model's
+//! hyper-parameters, so training settings can be compared by their stability.
 //!
-//! `cargo run --release -p vicpilco-experiments --example model_drift -- RUN_DIR FROM TO`
+//! `cargo run --release -p vicpilco-experiments --example model_drift -- RUN_DIR FROM TO [U]`
 //! Settings come from the shipped config of the run's experiment name.
 
 use anyhow::{Context, Result};
@@ -26,14 +27,25 @@ const INPUTS: [(usize, &str); 4] = [(0, "l_x"), (2, "l_xd"), (4, "l_t"), (5, "l_
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: model_drift RUN_DIR FROM TO";
+    let usage = "usage: model_drift RUN_DIR FROM TO [POLICY_UPDATE]";
     let dir = std::path::PathBuf::from(args.get(1).context(usage)?);
     let from: usize = args.get(2).context(usage)?.parse()?;
     let to: usize = args.get(3).context(usage)?.parse()?;
     let ck: Checkpoint =
         serde_json::from_str(&std::fs::read_to_string(dir.join("checkpoint.json"))?)?;
-    let saved: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("policy.json"))?)?;
+    let saved: serde_json::Value = match args.get(4) {
+        None => serde_json::from_str(&std::fs::read_to_string(dir.join("policy.json"))?)?,
+        Some(u) => {
+            let u: u64 = u.parse().context(usage)?;
+            let path = dir.join("policies.jsonl");
+            let text = std::fs::read_to_string(&path)
+                .with_context(|| format!("{} (runs before policies.jsonl)", path.display()))?;
+            let mut lines = text.lines().map(serde_json::from_str::<serde_json::Value>);
+            lines
+                .find(|v| v.as_ref().map_or(true, |v| v["episode"] == u))
+                .with_context(|| format!("{}: no policy of update {u}", path.display()))??
+        }
+    };
     let params: Vec<f64> = serde_json::from_value(saved["params"].clone())?;
     let (label, cfg_text) = config::shipped(&ck.experiment).context("unknown experiment")?;
     let cfg = config::parse(cfg_text, label)?;

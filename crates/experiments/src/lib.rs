@@ -8,6 +8,8 @@
 //!   `solved_at_episode`; the settings; the thesis's numbers beside the run's ([`checks`]);
 //! * `rollouts.jsonl` — every roll-out with its weighted cost per step, appended as recorded;
 //! * `predictions.jsonl` — every update's long-term prediction (means, variances, costs);
+//! * `policies.jsonl` — the parameters of the policy each update rolled out (episode 0: the
+//!   untrained policy the first update starts from), in [`Policy::params`]' order;
 //! * `checkpoint.json` — what `--resume` needs to continue bit for bit;
 //! * `policy.json` — the final policy parameters and dynamics hyper-parameters;
 //! * `final_eval.jsonl` — runs with evaluation starts: the final policy from fresh starts;
@@ -296,6 +298,7 @@ where
     let keep = checkpoint.as_ref().map(|c| c.state.completed);
     let rollouts = open_jsonl(&opts.out.join("rollouts.jsonl"), keep)?;
     let predictions = open_jsonl(&opts.out.join("predictions.jsonl"), keep)?;
+    let policies = open_jsonl(&opts.out.join("policies.jsonl"), keep)?;
     let summary = match &checkpoint {
         Some(c) => Summary {
             config: meta.config.clone(),
@@ -340,6 +343,7 @@ where
         started: Instant::now(),
         rollouts,
         predictions,
+        policies,
         current: None,
         error: None,
     };

@@ -2,7 +2,9 @@
 //!
 //! * every roll-out is appended to `rollouts.jsonl` when it is recorded, with its weighted
 //!   cost per step;
-//! * every update's long-term prediction is appended to `predictions.jsonl`;
+//! * every update's long-term prediction is appended to `predictions.jsonl`, and the policy
+//!   it rolled out (its parameters) to `policies.jsonl`, so any update's policy can be
+//!   replayed or judged under another update's model;
 //! * `summary.json` is rewritten after every update, and the plots, `report.html` and
 //!   `report.md` with it;
 //! * `checkpoint.json` after the initial roll-outs and after every update: the loop state
@@ -62,6 +64,7 @@ pub struct Recorder<'a> {
     pub started: Instant,
     pub rollouts: std::fs::File,
     pub predictions: std::fs::File,
+    pub policies: std::fs::File,
     /// The first roll-out of the update in progress, and the last one of the run.
     pub current: Option<Rollout>,
     pub error: Option<ExperimentError>,
@@ -321,6 +324,11 @@ impl LoopObserver for Recorder<'_> {
         self.inner.episode_done(record)
     }
     fn checkpoint(&mut self, state: &LoopState) {
+        // Episode 0's line is the untrained policy the first update starts from.
+        let line = serde_json::json!({ "episode": state.completed, "params": state.policy_params });
+        let path = self.dir.join("policies.jsonl");
+        let result = Self::append(&mut self.policies, path, &line);
+        self.keep(result);
         self.summary.wall_s = self.wall_s();
         let cp = Checkpoint {
             format: CHECKPOINT_FORMAT,

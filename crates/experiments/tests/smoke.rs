@@ -154,6 +154,16 @@ fn vil_gic_quick_run_writes_every_file_and_resumes_bit_for_bit() {
     }
     assert_eq!(read(&full.join("rollouts.jsonl")).lines().count(), 4);
     assert_eq!(read(&full.join("predictions.jsonl")).lines().count(), 3);
+    // The untrained policy and the three updates' policies; the last is policy.json's.
+    let policies: Vec<serde_json::Value> = read(&full.join("policies.jsonl"))
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(policies.len(), 4);
+    let last: serde_json::Value = serde_json::from_str(&read(&full.join("policy.json"))).unwrap();
+    assert_eq!(policies[3]["episode"], 3);
+    assert_eq!(policies[3]["params"], last["params"]);
+    assert_ne!(policies[2]["params"], last["params"]);
 
     run("vil-gic", &opts(&split, Some(1), false), &mut ()).expect("first part");
     // Settings other than the number of updates must match.
@@ -177,7 +187,12 @@ fn vil_gic_quick_run_writes_every_file_and_resumes_bit_for_bit() {
         summary_without_timings(&full),
         summary_without_timings(&split)
     );
-    for file in ["rollouts.jsonl", "predictions.jsonl", "policy.json"] {
+    for file in [
+        "rollouts.jsonl",
+        "predictions.jsonl",
+        "policies.jsonl",
+        "policy.json",
+    ] {
         assert!(
             read(&full.join(file)) == read(&split.join(file)),
             "{file} differs after resume"
