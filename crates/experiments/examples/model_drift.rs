@@ -4,12 +4,15 @@
 //! update later, predicted at 70–75 ± 20 by the model retrained on that confirming roll-out.
 //! This replays a run's model training (warm-started chain, as the learning loop does) on its
 //! recorded roll-outs 0..K for K in FROM..=TO and prints, for one policy of the run (the final
-//! one, or the one update U rolled out, from `policies.jsonl`), the predicted return (mean ±
-//! std of the summed immediate cost, and the objective J) and the Δẋ model's
-//! hyper-parameters, so training settings can be compared by their stability.
+//! one, the one update U rolled out, from `policies.jsonl`, or constant gains `const:KX,KY`,
+//! whose true return `gain_sweep` measures), the predicted return (mean ± std of the summed
+//! immediate cost, and the objective J) and the Δẋ model's hyper-parameters, so training
+//! settings can be compared by their stability, and a model's verdict checked against a
+//! policy whose outcome is known.
 //!
-//! `cargo run --release -p vicpilco-experiments --example model_drift -- RUN_DIR FROM TO [U]`
-//! Settings come from the shipped config of the run's experiment name.
+//! `cargo run --release -p vicpilco-experiments --example model_drift -- RUN_DIR FROM TO [final | U | const:KX,KY] [CONFIG]`
+//! Settings come from CONFIG, by default the shipped config of the run's experiment name, so
+//! a training setting can be tried on a run's recorded data.
 
 use anyhow::{Context, Result};
 use vicpilco_experiments::{arm, config, record::Checkpoint};
@@ -19,7 +22,7 @@ use vicpilco_gp::DynamicsModel;
 use vicpilco_learn::data::training_set;
 use vicpilco_learn::step::Predictor;
 use vicpilco_learn::value::value;
-use vicpilco_pilco::policy::Policy;
+use vicpilco_pilco::policy::{LinearPolicy, Policy};
 
 /// Index of Δẋ among the arm's GP targets, and of x, ẋ, t, k_x among its inputs.
 const DXD: usize = 2;
@@ -27,13 +30,28 @@ const INPUTS: [(usize, &str); 4] = [(0, "l_x"), (2, "l_xd"), (4, "l_t"), (5, "l_
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: model_drift RUN_DIR FROM TO [POLICY_UPDATE]";
+    let usage = "usage: model_drift RUN_DIR FROM TO [final | POLICY_UPDATE | const:KX,KY] [CONFIG]";
     let dir = std::path::PathBuf::from(args.get(1).context(usage)?);
     let from: usize = args.get(2).context(usage)?.parse()?;
     let to: usize = args.get(3).context(usage)?.parse()?;
     let ck: Checkpoint =
         serde_json::from_str(&std::fs::read_to_string(dir.join("checkpoint.json"))?)?;
-    let saved: serde_json::Value = match args.get(4) {
+    let cfg = match args.get(5) {
+        Some(path) => config::load(std::path::Path::new(path))?,
+        None => {
+            let (label, text) = config::shipped(&ck.experiment).context("unknown experiment")?;
+            config::parse(text, label)?
+        }
+    };
+    if let Some(gains) = args.get(4).and_then(|a| a.strip_prefix("const:")) {
+        let gains: Vec<f64> = gains
+            .split(',')
+            .map(str::parse)
+            .collect::<Result<_, _>>()
+            .context(usage)?;
+        return replay(&cfg, &ck, constant_gains(&cfg, &gains)?, from, to);
+    }
+    let saved: serde_json::Value = match args.get(4).filter(|a| *a != "final") {
         None => serde_json::from_str(&std::fs::read_to_string(dir.join("policy.json"))?)?,
         Some(u) => {
             let u: u64 = u.parse().context(usage)?;
@@ -47,8 +65,6 @@ fn main() -> Result<()> {
         }
     };
     let params: Vec<f64> = serde_json::from_value(saved["params"].clone())?;
-    let (label, cfg_text) = config::shipped(&ck.experiment).context("unknown experiment")?;
-    let cfg = config::parse(cfg_text, label)?;
     anyhow::ensure!(
         cfg.policy.kind == config::PolicyKind::Rbf,
         "{}: model_drift replays RBF-policy runs only",
@@ -56,7 +72,51 @@ fn main() -> Result<()> {
     );
     let mut policy = arm::rbf_policy(&cfg, 0)?;
     policy.set_params(&params)?;
-    let (setup, _env) = arm::setup(&cfg, policy.clone(), ck.seed)?;
+    replay(&cfg, &ck, policy, from, to)
+}
+
+/// A policy whose saturated output is the constant `gains` (k_x, k_y): zero weights and the
+/// offset that the saturation maps onto each gain.
+fn constant_gains(cfg: &config::ArmExperiment, gains: &[f64]) -> Result<LinearPolicy> {
+    let (lo, hi) = (cfg.policy.k_min, cfg.policy.k_max);
+    anyhow::ensure!(
+        gains.len() == cfg.n_actions() && gains.iter().all(|k| *k > lo && *k < hi),
+        "const: needs {} gains strictly inside ({lo}, {hi})",
+        cfg.n_actions()
+    );
+    // σ(u) = (9 sin u + sin 3u)/8 increases on [−π/2, π/2]; bisect σ(u) = target.
+    let sigma = |u: f64| (9.0 * u.sin() + (3.0 * u).sin()) / 8.0;
+    let offset = |k: f64| {
+        let target = (k - (hi + lo) / 2.0) / ((hi - lo) / 2.0);
+        let (mut a, mut b) = (-std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2);
+        for _ in 0..100 {
+            let mid = 0.5 * (a + b);
+            if sigma(mid) < target {
+                a = mid
+            } else {
+                b = mid
+            }
+        }
+        0.5 * (a + b)
+    };
+    let b: Vec<f64> = gains.iter().map(|&k| offset(k)).collect();
+    Ok(LinearPolicy::new(
+        faer::Mat::zeros(gains.len(), 4).as_ref(),
+        &b,
+    )?)
+}
+
+fn replay<P: Policy + Clone + Sync>(
+    cfg: &config::ArmExperiment,
+    ck: &Checkpoint,
+    policy: P,
+    from: usize,
+    to: usize,
+) -> Result<()>
+where
+    P::Cache: Send,
+{
+    let (setup, _env) = arm::setup(cfg, policy.clone(), ck.seed)?;
     let data = &ck.state.data;
     anyhow::ensure!(data.len() >= to, "the run has {} roll-outs", data.len());
 

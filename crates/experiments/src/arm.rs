@@ -334,6 +334,7 @@ pub fn setup<P>(
             train: TrainOptions {
                 max_iters: cfg.gp.line_searches,
                 cold_restart: cfg.gp.cold_restart,
+                lengthscale_floor: cfg.gp.lengthscale_floor.clone().unwrap_or_default(),
                 ..TrainOptions::default()
             },
             sparse: SparseTrainOptions {

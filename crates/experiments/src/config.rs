@@ -182,6 +182,12 @@ pub struct GpConfig {
     /// better fit per output (ours; PILCO only warm-starts from the previous fit, which kept
     /// the arm's velocity model at a length-scale of the sensor noise, EXPERIMENTS.md).
     pub cold_restart: bool,
+    /// Per GP input (x, y, ẋ, ẏ, [t,] actions), a length-scale floor: training adds a wall
+    /// penalty below about half of it (`vicpilco_gp::train::floor_penalty`; 0 = free). Ours,
+    /// not PILCO's: a length-scale at an input's sensor-noise scale fits the noise
+    /// (EXPERIMENTS.md, "A velocity model at the noise scale again").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lengthscale_floor: Option<Vec<f64>>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -391,6 +397,23 @@ impl ArmExperiment {
         c.at_least("gp.n_inducing", g.n_inducing, 1)?;
         c.at_least("gp.hyper_points", g.hyper_points, 1)?;
         c.at_least("gp.line_searches", g.line_searches as usize, 1)?;
+        if let Some(floor) = &g.lengthscale_floor {
+            let d = self.gp_input_dim();
+            if floor.len() != d {
+                return Err(c.fail(
+                    "gp.lengthscale_floor",
+                    format!("needs one value per GP input ({d}), got {}", floor.len()),
+                ));
+            }
+            for (i, &f) in floor.iter().enumerate() {
+                if !(f.is_finite() && f >= 0.0) {
+                    return Err(c.fail(
+                        &format!("gp.lengthscale_floor[{i}]"),
+                        format!("must be finite and ≥ 0, got {f}"),
+                    ));
+                }
+            }
+        }
         let s = &self.start;
         for i in 0..6 {
             c.finite(&format!("start.state[{i}]"), s.state[i])?;
@@ -477,6 +500,9 @@ impl ArmExperiment {
                 keys.push("optimiser.centre_scale");
             }
         }
+        if self.gp.lengthscale_floor.is_some() {
+            keys.push("gp.lengthscale_floor");
+        }
         if self.controller == ControllerKind::Sic && self.policy.kind == PolicyKind::Rbf {
             keys.push("policy.n_basis");
         }
@@ -487,6 +513,11 @@ impl ArmExperiment {
             }
         }
         keys
+    }
+
+    /// D of the dynamics GP: the 4 policy inputs, time if `gp.time_input`, and the actions.
+    pub fn gp_input_dim(&self) -> usize {
+        4 + usize::from(self.gp.time_input) + self.n_actions()
     }
 
     /// Actions: (k_x, k_y) or (k_x, k_y, Δx_ref, Δy_ref).

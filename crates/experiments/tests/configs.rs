@@ -179,3 +179,25 @@ fn the_centre_scale_rule_parses_and_needs_scaled_parameters() {
     let e = error_of(&smallest.replace("scale_params = true", "scale_params = false"));
     assert!(e.contains("optimiser.centre_scale"), "{e}");
 }
+
+#[test]
+fn a_lengthscale_floor_needs_one_non_negative_value_per_gp_input() {
+    let text = config::shipped("vil-gic").unwrap().1;
+    assert_eq!(shipped("vil-gic").gp.lengthscale_floor, None);
+    let with = |floor: &str| {
+        text.replace(
+            "cold_restart = true",
+            &format!("cold_restart = true\nlengthscale_floor = {floor}"),
+        )
+    };
+    // VIL: x, y, ẋ, ẏ, t, k_x, k_y.
+    let cfg = config::parse(&with("[0, 0, 0.01, 0.01, 0, 0, 0]"), "test.toml").unwrap();
+    assert_eq!(cfg.gp_input_dim(), 7);
+    assert!(cfg.ours_keys().contains(&"gp.lengthscale_floor"));
+    let e = error_of(&with("[0, 0, 0.01, 0.01]"));
+    assert!(e.contains("gp.lengthscale_floor") && e.contains('7'), "{e}");
+    let e = error_of(&with("[0, 0, -0.01, 0.01, 0, 0, 0]"));
+    assert!(e.contains("gp.lengthscale_floor[2]"), "{e}");
+    // VILTA has no time input but four actions.
+    assert_eq!(shipped("vilta").gp_input_dim(), 8);
+}

@@ -52,6 +52,11 @@ pub struct TrainOptions {
     /// Also train every output from [`initial_hyper`] of the data and keep, per output, the
     /// start that reaches the lower objective (default off: PILCO warm-starts only).
     pub cold_restart: bool,
+    /// Per input d, a length-scale below which the objective adds [`floor_penalty`] (not in
+    /// PILCO; empty, the default, or 0 for an input: no floor). Why: a length-scale at the
+    /// scale of an input's measurement noise fits that noise (EXPERIMENTS.md, the arm's
+    /// velocity model), and the likelihood on a few hundred points can prefer it.
+    pub lengthscale_floor: Vec<f64>,
 }
 
 impl Default for TrainOptions {
@@ -64,6 +69,7 @@ impl Default for TrainOptions {
             memory: 10,
             jitter: JitterPolicy::default(),
             cold_restart: false,
+            lengthscale_floor: Vec::new(),
         }
     }
 }
@@ -210,7 +216,37 @@ fn objective(
         e.value += p;
         e.grad.iter_mut().zip(&g).for_each(|(a, b)| *a += b);
     }
+    if !opts.lengthscale_floor.is_empty() {
+        let (p, g) = floor_penalty(h, &opts.lengthscale_floor);
+        e.value += p;
+        e.grad.iter_mut().zip(&g).for_each(|(a, b)| *a += b);
+    }
     Ok((e, plain))
+}
+
+/// Power of [`floor_penalty`]: high, like `hypCurb`'s, so the penalty is a wall.
+pub const FLOOR_PENALTY_POWER: i32 = 30;
+
+/// One-sided penalty keeping length-scale d above about half of `floor[d]`, with its gradient
+/// (PILCO order): `Σ_d z_d^p` with `z_d = max(0, log floor_d − log ℓ_d) / log 2` and
+/// p = [`FLOOR_PENALTY_POWER`]. It is 0 at and above the floor, below 1e-4 above 0.6 floor_d,
+/// 1 at floor_d / 2 and 1e6 at floor_d / 3. Inputs with floor 0 (or beyond `floor`'s
+/// length) are free.
+pub fn floor_penalty(hyp: &Hyper, floor: &[f64]) -> (f64, Vec<f64>) {
+    let d = hyp.dim();
+    let mut grad = vec![0.0; d + 2];
+    let mut value = 0.0;
+    let (p, octave) = (FLOOR_PENALTY_POWER, std::f64::consts::LN_2);
+    for (c, &f) in floor.iter().enumerate().take(d) {
+        if f > 0.0 {
+            let z = (f.ln() - hyp.log_ls[c]) / octave;
+            if z > 0.0 {
+                value += z.powi(p);
+                grad[c] = -f64::from(p) * z.powi(p - 1) / octave;
+            }
+        }
+    }
+    (value, grad)
 }
 
 fn train_output(

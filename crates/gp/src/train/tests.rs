@@ -288,3 +288,62 @@ fn initial_hyper_is_pilcos_first_guess() {
     assert!((h[0].log_sf - (2.0 * s).ln()).abs() < 1e-12);
     assert!((h[0].log_sn - (0.2 * s).ln()).abs() < 1e-12);
 }
+
+#[test]
+fn floor_penalty_gradient_matches_finite_differences_and_leaves_free_inputs_alone() {
+    let mut rng = ChaCha8Rng::seed_from_u64(31);
+    let mut h = random_hyp(4, &mut rng);
+    // Input 0 at 0.45 of its floor, 1 at half of it, 2 above it, 3 unfloored.
+    let floor = [0.3, 0.2, 0.05, 0.0];
+    h.log_ls[0] = (0.45f64 * 0.3).ln();
+    h.log_ls[1] = (0.1f64).ln();
+    h.log_ls[2] = (0.4f64).ln();
+    h.log_ls[3] = (1e-6f64).ln();
+    let (value, grad) = floor_penalty(&h, &floor);
+    let z0 = (1.0f64 / 0.45).ln() / std::f64::consts::LN_2;
+    assert!((value - z0.powi(30) - 1.0).abs() <= 1e-12 * value);
+    assert!(grad[0] < 0.0 && grad[1] < 0.0);
+    assert_eq!(&grad[2..], &[0.0; 4]);
+    let mut f = |p: &[f64]| floor_penalty(&Hyper::from_pilco(p), &floor);
+    check_gradient(&mut f, &h.to_pilco(), 1e-4, 1e-6);
+    // A third of the floor is a wall.
+    h.log_ls[0] = (0.1f64).ln();
+    assert!(floor_penalty(&h, &floor).0 > 1e5);
+}
+
+#[test]
+fn a_lengthscale_floor_keeps_training_off_the_noise_scale() {
+    // A floor 4× above a length-scale's free optimum holds it at the penalty's wall, between
+    // a third of the floor (penalty 1e6) and the floor.
+    let (x, y) = data(60, 2, 3);
+    let init = vec![start(&x, &y)];
+    let targets = Mat::from_fn(60, 1, |i, _| y[i]);
+    let free = train(
+        x.as_ref(),
+        targets.as_ref(),
+        &init,
+        &TrainOptions::default(),
+    )
+    .unwrap()
+    .0;
+    let l_free = free[0].log_ls[0].exp();
+    let floor = vec![4.0 * l_free, 0.0];
+    let opts = TrainOptions {
+        lengthscale_floor: floor.clone(),
+        ..Default::default()
+    };
+    let (held, rep) = train(x.as_ref(), targets.as_ref(), &init, &opts).unwrap();
+    let l_held = held[0].log_ls[0].exp();
+    assert!(
+        l_held > floor[0] / 3.0 && l_held < floor[0],
+        "{l_free} → {l_held}"
+    );
+    // The reported objective includes the floor penalty.
+    let plain = nlml(x.as_ref(), &y, &held[0]).unwrap().value;
+    let curb = HypCurb::default()
+        .penalty(&held[0], &input_std(x.as_ref()))
+        .0;
+    let extra = floor_penalty(&held[0], &floor).0;
+    let o = &rep.outputs[0];
+    assert!((o.objective - (plain + curb + extra)).abs() < 1e-9 * o.objective.abs().max(1.0));
+}
