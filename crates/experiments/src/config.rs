@@ -185,7 +185,7 @@ pub struct GpConfig {
     /// Per GP input (x, y, ẋ, ẏ, [t,] actions), a length-scale floor: training adds a wall
     /// penalty below about half of it (`vicpilco_gp::train::floor_penalty`; 0 = free). Ours,
     /// not PILCO's: a length-scale at an input's sensor-noise scale fits the noise
-    /// (EXPERIMENTS.md, "A velocity model at the noise scale again").
+    /// (EXPERIMENTS.md, "Why an update drops an inserting policy": measured, it did not help).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lengthscale_floor: Option<Vec<f64>>,
 }
