@@ -127,6 +127,7 @@ where
     println!("{:>10}{:>10}", "sf", "sn");
     let mut hyp = None;
     let mut inducing = None;
+    let mut last = None;
     for k in 1..=to {
         let (x, y) = training_set(&setup.spec, &data[..k], setup.prior_shift.as_deref());
         let init = hyp
@@ -162,6 +163,23 @@ where
             print!("{:>10.3e}", h.log_ls[i].exp());
         }
         println!("{:>10.3e}{:>10.3e}", h.log_sf.exp(), h.log_sn.exp());
+        if k == to {
+            last = Some(out);
+        }
+    }
+    // Where the prediction spreads: the last model's predicted state every second.
+    if let Some(out) = last {
+        println!("\nmodel {to}, first start: step, then mean ± std of x, y, xd, yd, f_x, f_y, then the actions' means");
+        for (t, step) in out.trajectories[0].iter().enumerate().step_by(10) {
+            print!("{t:>4}");
+            for (i, m) in step.mean.iter().enumerate().take(6) {
+                print!("  {m:>8.3} ± {:<7.3}", step.cov[(i, i)].max(0.0).sqrt());
+            }
+            for a in &step.action_mean {
+                print!("{a:>8.1}");
+            }
+            println!();
+        }
     }
     Ok(())
 }
