@@ -7,8 +7,15 @@
 //! 5 s, where insertion happens), each from the same start and noise seed as the runs'
 //! constant-gain check.
 //!
-//! `cargo run --release -p vicpilco-experiments --example gain_sweep -- [EXPERIMENT] [SEED]`
-//! (defaults: vil-gic-rbf10, seed 1). The gains are clipped to the config's [k_min, k_max].
+//! With `switch`, the gains are not constant but switched on the measured x: k_x = PUSH while
+//! x_on < x < x_off (the insertion spring lies at 0.70–0.73 m, the end wall at 0.75 m) and
+//! LOW elsewhere, k_y constant. This asks whether the cost itself puts the best policy on the
+//! knife-edge of the spring (it does for constant gains) or whether a policy with a wide
+//! margin costs about as little.
+//!
+//! `cargo run --release -p vicpilco-experiments --example gain_sweep -- [EXPERIMENT] [SEED] [switch]`
+//! (defaults: vil-gic-rbf10, seed 1, constant gains). The gains are clipped to the config's
+//! [k_min, k_max].
 
 use anyhow::{Context, Result};
 use vicpilco_env::arm::ArmEnv;
@@ -20,6 +27,11 @@ const KX: [f64; 13] = [
     25.0, 50.0, 75.0, 100.0, 120.0, 130.0, 135.0, 140.0, 145.0, 150.0, 175.0, 200.0, 250.0,
 ];
 const KY: [f64; 3] = [25.0, 127.5, 250.0];
+/// `switch` mode: k_x while pushing through the spring, k_x elsewhere, k_y, and the x window.
+const PUSH: [f64; 4] = [140.0, 160.0, 200.0, 250.0];
+const LOW: [f64; 3] = [5.0, 30.0, 80.0];
+const KY_SWITCHED: [f64; 2] = [5.0, 30.0];
+const WINDOWS: [(f64, f64); 3] = [(0.60, 0.74), (0.69, 0.74), (0.69, 0.76)];
 /// Indices of f_x, f_y in the arm's state (x, y, ẋ, ẏ, f_x, f_y).
 const FORCE: [usize; 2] = [4, 5];
 
@@ -35,6 +47,44 @@ fn main() -> Result<()> {
     );
     let (setup, mut env) = arm::setup(&cfg, arm::rbf_policy(&cfg, 0)?, seed)?;
     let (k_min, k_max) = (cfg.policy.k_min, cfg.policy.k_max);
+    if args.get(3).map(String::as_str) == Some("switch") {
+        println!("{name}, seed {seed}: k_x switched on x, k_y constant, clipped to [{k_min}, {k_max}] N/m");
+        println!(
+            "{:>6}{:>6}{:>6}{:>7}{:>7}{:>9}{:>9}{:>9}{:>10}{:>10}",
+            "push",
+            "low",
+            "k_y",
+            "x_on",
+            "x_off",
+            "inserts",
+            "final x",
+            "max |f|",
+            "return",
+            "last 5 s"
+        );
+        for push in PUSH {
+            for low in LOW {
+                for ky in KY_SWITCHED {
+                    for (x_on, x_off) in WINDOWS {
+                        let clip = |k: f64| k.clamp(k_min, k_max);
+                        let gains = |obs: &[f64]| {
+                            let kx = if obs[0] > x_on && obs[0] < x_off {
+                                push
+                            } else {
+                                low
+                            };
+                            [clip(kx), clip(ky)]
+                        };
+                        let (ok, final_x, max_f, ret, tail) = score(&setup, &mut env, seed, gains)?;
+                        println!(
+                            "{push:>6.0}{low:>6.0}{ky:>6.0}{x_on:>7.2}{x_off:>7.2}{ok:>9}{final_x:>9.3}{max_f:>9.1}{ret:>10.2}{tail:>10.2}"
+                        );
+                    }
+                }
+            }
+        }
+        return Ok(());
+    }
     println!("{name}, seed {seed}: constant (k_x, k_y) clipped to [{k_min}, {k_max}] N/m");
     println!(
         "{:>7}{:>7}{:>10}{:>10}{:>9}{:>10}{:>12}",
@@ -43,7 +93,7 @@ fn main() -> Result<()> {
     for ky in KY {
         for kx in KX {
             let gains = [kx.clamp(k_min, k_max), ky.clamp(k_min, k_max)];
-            let (ok, final_x, max_f, ret, tail) = constant(&setup, &mut env, seed, gains)?;
+            let (ok, final_x, max_f, ret, tail) = score(&setup, &mut env, seed, |_| gains)?;
             println!(
                 "{:>7.1}{:>7.1}{:>10}{:>10.3}{:>9.1}{:>10.2}{:>12.2}",
                 gains[0], gains[1], ok, final_x, max_f, ret, tail
@@ -53,12 +103,13 @@ fn main() -> Result<()> {
     Ok(())
 }
 
-/// Inserted, final x, max contact force, return, and return over the last 5 s.
-fn constant(
+/// Inserted, final x, max contact force, return, and return over the last 5 s of one roll-out
+/// whose gains are `gains(observation)`.
+fn score(
     setup: &LoopSetup<RbfPolicy>,
     env: &mut ArmEnv,
     seed: u64,
-    gains: [f64; 2],
+    gains: impl Fn(&[f64]) -> [f64; 2],
 ) -> Result<(bool, f64, f64, f64, f64)> {
     let start = setup
         .env_start
@@ -67,7 +118,7 @@ fn constant(
         env,
         &start,
         derive_seed(seed, 1, arm::PURPOSE_EVALUATION),
-        |_, _| Ok(gains.to_vec()),
+        |_, obs| Ok(gains(obs).to_vec()),
     )?;
     let costs = setup.recorded_costs(&r);
     let half = costs.len() / 2;
