@@ -20,13 +20,26 @@ use vicpilco_gp::moments::MmModel;
 use vicpilco_gp::train::initial_hyper;
 use vicpilco_gp::DynamicsModel;
 use vicpilco_learn::data::training_set;
-use vicpilco_learn::step::Predictor;
+use vicpilco_learn::step::{Predictor, StepSpec};
 use vicpilco_learn::value::value;
 use vicpilco_pilco::policy::{LinearPolicy, Policy};
 
-/// Index of Δẋ among the arm's GP targets, and of x, ẋ, t, k_x among its inputs.
+/// Index of Δẋ among the arm's GP targets.
 const DXD: usize = 2;
-const INPUTS: [(usize, &str); 4] = [(0, "l_x"), (2, "l_xd"), (4, "l_t"), (5, "l_kx")];
+
+/// Where x, ẋ, t (when a GP input) and k_x sit among the GP inputs: the state entries listed
+/// in `spec.dyn_inputs`, then the actions.
+fn shown_inputs(spec: &StepSpec) -> Vec<(usize, &'static str)> {
+    let mut shown: Vec<(usize, &'static str)> = [(0, "l_x"), (2, "l_xd"), (arm::TIME_INDEX, "l_t")]
+        .into_iter()
+        .filter_map(|(entry, name)| {
+            let at = spec.dyn_inputs.iter().position(|&i| i == entry)?;
+            Some((at, name))
+        })
+        .collect();
+    shown.push((spec.dyn_inputs.len(), "l_kx"));
+    shown
+}
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -120,8 +133,9 @@ where
     let data = &ck.state.data;
     anyhow::ensure!(data.len() >= to, "the run has {} roll-outs", data.len());
 
+    let inputs = shown_inputs(&setup.spec);
     print!("{:>3}{:>7}{:>9}{:>8}{:>9}", "K", "N", "J", "mean", "std");
-    for (_, name) in INPUTS {
+    for &(_, name) in &inputs {
         print!("{name:>10}");
     }
     println!("{:>10}{:>10}", "sf", "sn");
@@ -159,7 +173,7 @@ where
         let (mean, std) = setup.ret.predicted_return(&out);
         let h = &model.hyp()[DXD];
         print!("{k:>3}{n:>7}{:>9.2}{mean:>8.2}{std:>9.2}", out.j);
-        for (i, _) in INPUTS {
+        for &(i, _) in &inputs {
             print!("{:>10.3e}", h.log_ls[i].exp());
         }
         println!("{:>10.3e}{:>10.3e}", h.log_sf.exp(), h.log_sn.exp());

@@ -33,7 +33,9 @@ const PURPOSE_POLICY_INIT: u64 = 11;
 pub const PURPOSE_EVALUATION: u64 = 12;
 
 /// Index of the time entry in the augmented state (x, y, ẋ, ẏ, f_x, f_y, t).
-const TIME_INDEX: usize = 6;
+pub const TIME_INDEX: usize = 6;
+/// Indices of f_x, f_y in the arm's state (x, y, ẋ, ẏ, f_x, f_y).
+const FORCE_INDICES: [usize; 2] = [4, 5];
 
 fn diag(v: &[f64]) -> Mat<f64> {
     Mat::from_fn(v.len(), v.len(), |i, j| if i == j { v[i] } else { 0.0 })
@@ -96,6 +98,9 @@ struct Problem {
 fn problem(cfg: &ArmExperiment, arm: &ArmConfig) -> Result<Problem, ExperimentError> {
     let m = cfg.n_actions();
     let mut dyn_inputs = vec![0, 1, 2, 3];
+    if cfg.gp.force_inputs {
+        dyn_inputs.extend(FORCE_INDICES);
+    }
     if cfg.gp.time_input {
         dyn_inputs.push(TIME_INDEX);
     }

@@ -182,12 +182,20 @@ pub struct GpConfig {
     /// better fit per output (ours; PILCO only warm-starts from the previous fit, which kept
     /// the arm's velocity model at a length-scale of the sensor noise, EXPERIMENTS.md).
     pub cold_restart: bool,
-    /// Per GP input (x, y, ẋ, ẏ, [t,] actions), a length-scale floor: training adds a wall
+    /// Per GP input (x, y, ẋ, ẏ, [f_x, f_y,] [t,] actions), a length-scale floor: training adds a wall
     /// penalty below about half of it (`vicpilco_gp::train::floor_penalty`; 0 = free). Ours,
     /// not PILCO's: a length-scale at an input's sensor-noise scale fits the noise
     /// (EXPERIMENTS.md, "Why an update drops an inserting policy": measured, it did not help).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lengthscale_floor: Option<Vec<f64>>,
+    /// Also feed the measured contact forces (f_x, f_y) to the dynamics GP, after (x, y, ẋ, ẏ).
+    /// Ours, not the thesis's (its inputs are the motion states only, eq. 4-3/4-5, because
+    /// "the forces follow from the states, gains and reference"). Under VILTA the reference is
+    /// the integral of the policy's increments, a state the GP does not see, so a force that
+    /// ramps up while the peg is held still looks like noise to it; the last force makes the
+    /// ramp predictable (EXPERIMENTS.md, "Force inputs for VILTA").
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub force_inputs: bool,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -503,6 +511,9 @@ impl ArmExperiment {
         if self.gp.lengthscale_floor.is_some() {
             keys.push("gp.lengthscale_floor");
         }
+        if self.gp.force_inputs {
+            keys.push("gp.force_inputs");
+        }
         if self.controller == ControllerKind::Sic && self.policy.kind == PolicyKind::Rbf {
             keys.push("policy.n_basis");
         }
@@ -515,9 +526,12 @@ impl ArmExperiment {
         keys
     }
 
-    /// D of the dynamics GP: the 4 policy inputs, time if `gp.time_input`, and the actions.
+    /// D of the dynamics GP: the 4 policy inputs, the forces if `gp.force_inputs`, time if
+    /// `gp.time_input`, and the actions.
     pub fn gp_input_dim(&self) -> usize {
-        4 + usize::from(self.gp.time_input) + self.n_actions()
+        4 + 2 * usize::from(self.gp.force_inputs)
+            + usize::from(self.gp.time_input)
+            + self.n_actions()
     }
 
     /// Actions: (k_x, k_y) or (k_x, k_y, Δx_ref, Δy_ref).

@@ -2,6 +2,7 @@
 //! numbers are the thesis's (issue 6's tables); bad keys and values are errors naming them.
 
 use vicpilco_env::arm::ControllerKind;
+use vicpilco_experiments::arm;
 use vicpilco_experiments::config::{self, ArmExperiment, PolicyKind, PriorMean, Task, CONFIGS};
 
 fn shipped(name: &str) -> ArmExperiment {
@@ -200,4 +201,28 @@ fn a_lengthscale_floor_needs_one_non_negative_value_per_gp_input() {
     assert!(e.contains("gp.lengthscale_floor[2]"), "{e}");
     // VILTA has no time input but four actions.
     assert_eq!(shipped("vilta").gp_input_dim(), 8);
+}
+
+#[test]
+fn force_inputs_add_the_contact_forces_to_the_gp_inputs() {
+    let text = config::shipped("vilta").unwrap().1;
+    let base = shipped("vilta");
+    assert!(!base.gp.force_inputs);
+    assert!(!base.ours_keys().contains(&"gp.force_inputs"));
+    let cfg = config::parse(
+        &text.replace(
+            "cold_restart = true",
+            "cold_restart = true\nforce_inputs = true",
+        ),
+        "test.toml",
+    )
+    .unwrap();
+    assert!(cfg.ours_keys().contains(&"gp.force_inputs"));
+    // x, y, ẋ, ẏ, f_x, f_y and the four actions.
+    assert_eq!(cfg.gp_input_dim(), 10);
+    let policy = arm::rbf_policy(&cfg, 1).unwrap();
+    let (setup, _) = arm::setup(&cfg, policy, 1).unwrap();
+    assert_eq!(setup.spec.dyn_inputs, vec![0, 1, 2, 3, 4, 5]);
+    let (base_setup, _) = arm::setup(&base, arm::rbf_policy(&base, 1).unwrap(), 1).unwrap();
+    assert_eq!(base_setup.spec.dyn_inputs, vec![0, 1, 2, 3]);
 }
