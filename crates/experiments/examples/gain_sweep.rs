@@ -27,13 +27,14 @@ const KX: [f64; 13] = [
     25.0, 50.0, 75.0, 100.0, 120.0, 130.0, 135.0, 140.0, 145.0, 150.0, 175.0, 200.0, 250.0,
 ];
 const KY: [f64; 3] = [25.0, 127.5, 250.0];
-/// `switch` mode: k_x while pushing through the spring, k_x elsewhere, k_y, and the x window.
+/// `switch` mode: k_x inside the x window (through the spring).
 const PUSH: [f64; 4] = [140.0, 160.0, 200.0, 250.0];
+/// `switch` mode: k_x outside the window.
 const LOW: [f64; 3] = [5.0, 30.0, 80.0];
+/// `switch` mode: constant k_y.
 const KY_SWITCHED: [f64; 2] = [5.0, 30.0];
+/// `switch` mode: (x_on, x_off) windows (m); the last stays stiff against the end wall.
 const WINDOWS: [(f64, f64); 3] = [(0.60, 0.74), (0.69, 0.74), (0.69, 0.76)];
-/// Indices of f_x, f_y in the arm's state (x, y, ẋ, ẏ, f_x, f_y).
-const FORCE: [usize; 2] = [4, 5];
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -125,7 +126,7 @@ fn score(
     let max_f = r
         .true_states
         .iter()
-        .map(|s| s[FORCE[0]].hypot(s[FORCE[1]]))
+        .map(|s| s[arm::FORCE_INDICES[0]].hypot(s[arm::FORCE_INDICES[1]]))
         .fold(0.0, f64::max);
     let final_x = r.true_states.last().map_or(f64::NAN, |s| s[0]);
     Ok((

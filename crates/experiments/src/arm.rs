@@ -35,7 +35,7 @@ pub const PURPOSE_EVALUATION: u64 = 12;
 /// Index of the time entry in the augmented state (x, y, ẋ, ẏ, f_x, f_y, t).
 pub const TIME_INDEX: usize = 6;
 /// Indices of f_x, f_y in the arm's state (x, y, ẋ, ẏ, f_x, f_y).
-const FORCE_INDICES: [usize; 2] = [4, 5];
+pub const FORCE_INDICES: [usize; 2] = [4, 5];
 
 fn diag(v: &[f64]) -> Mat<f64> {
     Mat::from_fn(v.len(), v.len(), |i, j| if i == j { v[i] } else { 0.0 })
