@@ -19,7 +19,10 @@ use vicpilco_gp::train::{initial_hyper, train, HypCurb, TrainOptions};
 use vicpilco_gp::{GpModel, Hyper};
 use vicpilco_learn::data::training_set;
 
-const INPUT_NAMES: [&str; 7] = ["x", "y", "xd", "yd", "t", "kx", "ky"];
+/// Names of the augmented state's entries (x, y, ẋ, ẏ, f_x, f_y, t) and of the actions
+/// (VIL: the gains; VILTA: also the reference increments).
+const STATE_NAMES: [&str; 7] = ["x", "y", "xd", "yd", "fx", "fy", "t"];
+const ACTION_NAMES: [&str; 4] = ["kx", "ky", "dxref", "dyref"];
 const TARGET_NAMES: [&str; 6] = ["dx", "dy", "dxd", "dyd", "fx", "fy"];
 
 fn main() -> Result<()> {
@@ -43,6 +46,14 @@ fn main() -> Result<()> {
         data.len(),
         k + 1
     );
+    // The GP's inputs: the state entries the spec lists, then the actions.
+    let input_names: Vec<&str> = setup
+        .spec
+        .dyn_inputs
+        .iter()
+        .map(|&i| STATE_NAMES[i])
+        .chain(ACTION_NAMES.iter().copied().take(cfg.n_actions()))
+        .collect();
     let (x, y) = training_set(&setup.spec, &data[..k], setup.prior_shift.as_deref());
     let (xt, yt) = training_set(&setup.spec, &data[k..=k], setup.prior_shift.as_deref());
     let opts = TrainOptions {
@@ -70,12 +81,13 @@ fn main() -> Result<()> {
             "{} training points, curb ls {curb_ls}, {name} start",
             x.nrows()
         );
-        print_fit(&x, &y, &xt, &yt, hyp, &report.objectives())?;
+        print_fit(&input_names, &x, &y, &xt, &yt, hyp, &report.objectives())?;
     }
     Ok(())
 }
 
 fn print_fit(
+    input_names: &[&str],
     x: &Mat<f64>,
     y: &Mat<f64>,
     xt: &Mat<f64>,
@@ -84,7 +96,7 @@ fn print_fit(
     objectives: &[f64],
 ) -> Result<()> {
     print!("{:>5}", "");
-    for n in INPUT_NAMES.iter().take(x.ncols()) {
+    for n in input_names {
         print!("{n:>10}");
     }
     println!(
