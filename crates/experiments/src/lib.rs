@@ -27,7 +27,7 @@ pub mod record;
 pub mod summary;
 
 use config::{ArmExperiment, PolicyKind};
-use record::{open_jsonl, read_checkpoint, PredictionLabels, Recorder, RolloutExtras};
+use record::{open_jsonl, read_checkpoint, ClaimsOf, PredictionLabels, Recorder, RolloutExtras};
 use std::path::PathBuf;
 use std::time::Instant;
 use summary::{write_json_atomic, Summary};
@@ -147,7 +147,7 @@ pub fn run(
 }
 
 /// What a run is, for its summary and checkpoint.
-struct RunMeta {
+struct RunMeta<'a> {
     /// Every setting, for `summary.json`.
     config: serde_json::Value,
     /// The settings a resumed run must share (all but the number of updates).
@@ -156,6 +156,7 @@ struct RunMeta {
     policy: String,
     n_params: usize,
     extras: Option<RolloutExtras>,
+    claims: Option<ClaimsOf<'a>>,
 }
 
 /// A classic swing-up with the run options applied to its PILCO scenario.
@@ -196,6 +197,7 @@ where
         ),
         n_params: setup.policy.n_free_params(),
         extras: None,
+        claims: None,
     };
     let summary = finish(name, opts, setup, &mut env, observer, meta)?.0;
     vicpilco_report::write_report(&opts.out)?;
@@ -254,6 +256,9 @@ fn run_arm(
         policy,
         n_params: cfg.n_params(),
         extras: Some(arm_extras),
+        claims: Some(Box::new(|s: &Summary| {
+            checks::thesis_checks(name, &cfg, planned, s)
+        })),
     };
     let mut summary = match cfg.policy.kind {
         PolicyKind::Rbf => {
@@ -284,7 +289,7 @@ fn finish<P>(
     setup: LoopSetup<P>,
     env: &mut dyn Environment,
     observer: &mut dyn LoopObserver,
-    meta: RunMeta,
+    meta: RunMeta<'_>,
 ) -> Result<(Summary, LoopOutcome<P>), ExperimentError>
 where
     P: Policy + Clone + Sync,
@@ -340,6 +345,7 @@ where
         labels,
         extras: meta.extras,
         identity: meta.identity,
+        claims: meta.claims,
         started: Instant::now(),
         rollouts,
         predictions,

@@ -40,6 +40,10 @@ pub struct Checkpoint {
 /// Task-specific numbers of a roll-out for `summary.json`: (final x, largest |f|, start y).
 pub type RolloutExtras = fn(&Rollout) -> (f64, f64, f64);
 
+/// The thesis claims a run's summary decides so far: applied after every update, so a run
+/// stopped part-way keeps the verdicts its updates already settle.
+pub type ClaimsOf<'a> = Box<dyn Fn(&Summary) -> Vec<crate::summary::ThesisCheck> + 'a>;
+
 /// How predictions are labelled and weighted in `predictions.jsonl`.
 pub struct PredictionLabels {
     pub dt: f64,
@@ -59,6 +63,7 @@ pub struct Recorder<'a> {
     pub labels: PredictionLabels,
     pub extras: Option<RolloutExtras>,
     pub identity: serde_json::Value,
+    pub claims: Option<ClaimsOf<'a>>,
     /// Wall time of earlier sessions of this run (resumed runs).
     pub wall_before: f64,
     pub started: Instant,
@@ -314,6 +319,9 @@ impl LoopObserver for Recorder<'_> {
         });
         self.summary.solved_at_episode = solved_at(&self.summary.episodes);
         self.summary.wall_s = self.wall_s();
+        if let Some(claims) = &self.claims {
+            self.summary.thesis_reference = claims(&self.summary);
+        }
         let result = self.summary.write(&self.dir).map_err(ExperimentError::from);
         self.keep(result);
         // The report follows the run, so a long run can be watched in a browser.

@@ -107,6 +107,26 @@ fn summary_without_timings(dir: &std::path::Path) -> serde_json::Value {
     v
 }
 
+/// Reads `summary.json`'s claim ids and verdicts as each update ends, as a user watching a run
+/// (or stopping it) would find them.
+struct ClaimsAfterEachUpdate {
+    dir: std::path::PathBuf,
+    seen: Vec<Vec<(String, Option<bool>)>>,
+}
+
+impl vicpilco_learn::outer::LoopObserver for ClaimsAfterEachUpdate {
+    fn episode_done(&mut self, _record: &vicpilco_learn::outer::EpisodeRecord) {
+        let v: serde_json::Value =
+            serde_json::from_str(&read(&self.dir.join("summary.json"))).unwrap();
+        let claims = v["thesis_reference"].as_array().unwrap().iter();
+        self.seen.push(
+            claims
+                .map(|c| (c["id"].as_str().unwrap().to_string(), c["pass"].as_bool()))
+                .collect(),
+        );
+    }
+}
+
 /// `vicpilco run vil-gic --quick`: three short policy updates on the arm write every file; a
 /// run stopped after update 1 and resumed ends with the same files, timings excepted.
 #[test]
@@ -121,8 +141,26 @@ fn vil_gic_quick_run_writes_every_file_and_resumes_bit_for_bit() {
         resume,
         ..Default::default()
     };
-    let summary = run("vil-gic", &opts(&full, None, false), &mut ()).expect("vil-gic quick run");
+    let mut watch = ClaimsAfterEachUpdate {
+        dir: full.clone(),
+        seen: Vec::new(),
+    };
+    let summary = run("vil-gic", &opts(&full, None, false), &mut watch).expect("vil-gic quick run");
     assert_eq!(summary.episodes.len(), vicpilco_experiments::QUICK_EPISODES);
+    // A run stopped after any update already lists every claim; those its updates cannot
+    // decide yet (here: all of them, three updates being too few) stay open.
+    assert_eq!(watch.seen.len(), vicpilco_experiments::QUICK_EPISODES);
+    let ids: Vec<&str> = summary
+        .thesis_reference
+        .iter()
+        .map(|c| c.id.as_str())
+        .collect();
+    for seen in &watch.seen {
+        assert_eq!(seen.iter().map(|c| c.0.as_str()).collect::<Vec<_>>(), ids);
+        for (id, pass) in seen {
+            assert!(id == "time_per_update" || pass.is_none(), "{id}: {pass:?}");
+        }
+    }
     for e in &summary.episodes {
         assert!(
             e.line_searches <= vicpilco_experiments::QUICK_LENGTH,
