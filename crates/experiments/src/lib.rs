@@ -251,6 +251,13 @@ fn run_arm(
     }
     config["simulator"] =
         serde_json::to_value(&arm_cfg).map_err(|e| ExperimentError::Write(e.into()))?;
+    // Runs before the flushing (and runs whose rayon pool could not flush) used gradual
+    // underflow; their numbers differ below 1e-300 and their optimiser paths may part.
+    config["subnormals"] = serde_json::json!(if subnormals::flushing_here() {
+        "flushed to zero"
+    } else {
+        "gradual underflow"
+    });
     let meta = |policy: String| RunMeta {
         config: config.clone(),
         identity: identity.clone(),

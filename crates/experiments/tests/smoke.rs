@@ -175,6 +175,7 @@ fn vil_gic_quick_run_writes_every_file_and_resumes_bit_for_bit() {
     assert!(summary.initial_return.is_some() && summary.constant_gain_return.is_some());
     assert!(summary.constant_gain_inserted.is_some());
     assert!(!summary.thesis_reference.is_empty());
+    assert_eq!(summary.config["subnormals"], "flushed to zero");
     for file in [
         "summary.json",
         "checkpoint.json",
