@@ -23,7 +23,6 @@ use vicpilco_learn::data::training_set;
 /// (VIL: the gains; VILTA: also the reference increments).
 const STATE_NAMES: [&str; 7] = ["x", "y", "xd", "yd", "fx", "fy", "t"];
 const ACTION_NAMES: [&str; 4] = ["kx", "ky", "dxref", "dyref"];
-const TARGET_NAMES: [&str; 6] = ["dx", "dy", "dxd", "dyd", "fx", "fy"];
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -106,7 +105,7 @@ fn print_fit(
     let model = GpModel::new(x.clone(), y.clone(), hyp.clone())?;
     let scores = held_out(&model, xt, yt);
     for (e, h) in hyp.iter().enumerate() {
-        print!("{:>5}", TARGET_NAMES[e]);
+        print!("{:>5}", arm::GP_TARGET_NAMES[e]);
         for l in &h.log_ls {
             print!("{:>10.3e}", l.exp());
         }

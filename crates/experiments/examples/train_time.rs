@@ -24,8 +24,6 @@ use vicpilco_learn::step::Predictor;
 use vicpilco_learn::value::value;
 use vicpilco_pilco::policy::Policy;
 
-const TARGET_NAMES: [&str; 6] = ["dx", "dy", "dxd", "dyd", "fx", "fy"];
-
 fn main() -> Result<()> {
     let mut args: Vec<String> = std::env::args().collect();
     let gradual = args.iter().any(|a| a == "--gradual-underflow");
@@ -76,7 +74,7 @@ fn fit_and_time(args: &[String]) -> Result<()> {
     // The unit of the inducing-input optimisation: one FITC nlml + gradient per output, at the
     // warm start, with the hyper-parameters the last fit left.
     if let Some(u) = &inducing {
-        for (e, (name, h)) in TARGET_NAMES.iter().zip(&init).enumerate() {
+        for (e, (name, h)) in arm::GP_TARGET_NAMES.iter().zip(&init).enumerate() {
             let y: Vec<f64> = (0..targets.nrows()).map(|i| targets[(i, e)]).collect();
             let t0 = Instant::now();
             let eval = vicpilco_gp::sparse::fitc_nlml(inputs.as_ref(), &y, h, u.as_ref())?;
@@ -105,7 +103,7 @@ fn fit_and_time(args: &[String]) -> Result<()> {
         "{:>5}{:>8}{:>8}{:>10}{:>10}{:>12}{:>12}  termination",
         "", "iters", "evals", "seconds", "kept", "max jitter", "nlml"
     );
-    for (name, o) in TARGET_NAMES.iter().zip(&hyper.outputs) {
+    for (name, o) in arm::GP_TARGET_NAMES.iter().zip(&hyper.outputs) {
         println!(
             "{name:>5}{:>8}{:>8}{:>10.1}{:>10}{:>12.1e}{:>12.1}  {:?}",
             o.iterations,

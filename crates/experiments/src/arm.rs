@@ -36,6 +36,9 @@ pub const PURPOSE_EVALUATION: u64 = 12;
 pub const TIME_INDEX: usize = 6;
 /// Indices of f_x, f_y in the arm's state (x, y, ẋ, ẏ, f_x, f_y).
 pub const FORCE_INDICES: [usize; 2] = [4, 5];
+/// The dynamics GP's targets, in output order: position and velocity increments, then the
+/// measured contact forces.
+pub const GP_TARGET_NAMES: [&str; 6] = ["dx", "dy", "dxd", "dyd", "fx", "fy"];
 
 fn diag(v: &[f64]) -> Mat<f64> {
     Mat::from_fn(v.len(), v.len(), |i, j| if i == j { v[i] } else { 0.0 })
