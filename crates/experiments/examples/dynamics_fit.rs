@@ -19,11 +19,6 @@ use vicpilco_gp::train::{initial_hyper, train, HypCurb, TrainOptions};
 use vicpilco_gp::{GpModel, Hyper};
 use vicpilco_learn::data::training_set;
 
-/// Names of the augmented state's entries (x, y, ẋ, ẏ, f_x, f_y, t) and of the actions
-/// (VIL: the gains; VILTA: also the reference increments).
-const STATE_NAMES: [&str; 7] = ["x", "y", "xd", "yd", "fx", "fy", "t"];
-const ACTION_NAMES: [&str; 4] = ["kx", "ky", "dxref", "dyref"];
-
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().collect();
     let dir = std::path::PathBuf::from(
@@ -37,7 +32,7 @@ fn main() -> Result<()> {
     let (label, cfg_text) = config::shipped(&ck.experiment).context("unknown experiment")?;
     let cfg = config::parse(cfg_text, label)?;
     let policy = arm::rbf_policy(&cfg, 0)?;
-    let (setup, _env) = arm::setup(&cfg, policy, 0)?;
+    let (setup, env) = arm::setup(&cfg, policy, 0)?;
     let data = &ck.state.data;
     anyhow::ensure!(
         data.len() > k,
@@ -45,14 +40,7 @@ fn main() -> Result<()> {
         data.len(),
         k + 1
     );
-    // The GP's inputs: the state entries the spec lists, then the actions.
-    let input_names: Vec<&str> = setup
-        .spec
-        .dyn_inputs
-        .iter()
-        .map(|&i| STATE_NAMES[i])
-        .chain(ACTION_NAMES.iter().copied().take(cfg.n_actions()))
-        .collect();
+    let input_names = arm::gp_input_names(&setup.spec, &env);
     let (x, y) = training_set(&setup.spec, &data[..k], setup.prior_shift.as_deref());
     let (xt, yt) = training_set(&setup.spec, &data[k..=k], setup.prior_shift.as_deref());
     let opts = TrainOptions {
@@ -86,7 +74,7 @@ fn main() -> Result<()> {
 }
 
 fn print_fit(
-    input_names: &[&str],
+    input_names: &[String],
     x: &Mat<f64>,
     y: &Mat<f64>,
     xt: &Mat<f64>,

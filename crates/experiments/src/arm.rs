@@ -15,6 +15,7 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use std::sync::Mutex;
 use vicpilco_env::arm::{ActionMode, ArmConfig, ArmEnv, OuParams, RefPoint, ViaPlan};
+use vicpilco_env::Environment;
 use vicpilco_gp::sparse::SparseTrainOptions;
 use vicpilco_gp::train::Wolfe;
 use vicpilco_gp::{DynamicsOptions, TrainOptions};
@@ -39,6 +40,20 @@ pub const FORCE_INDICES: [usize; 2] = [4, 5];
 /// The dynamics GP's targets, in output order: position and velocity increments, then the
 /// measured contact forces.
 pub const GP_TARGET_NAMES: [&str; 6] = ["dx", "dy", "dxd", "dyd", "fx", "fy"];
+
+/// The dynamics GP's input names in column order: the state entries `spec.dyn_inputs` lists
+/// (the arm's state, with `t` at [`TIME_INDEX`]), then the environment's actions.
+pub fn gp_input_names(spec: &StepSpec, env: &ArmEnv) -> Vec<String> {
+    spec.dyn_inputs
+        .iter()
+        .map(|&i| {
+            vicpilco_env::arm::STATE_NAMES
+                .get(i)
+                .map_or_else(|| "t".to_string(), |s| s.to_string())
+        })
+        .chain(env.action_names())
+        .collect()
+}
 
 fn diag(v: &[f64]) -> Mat<f64> {
     Mat::from_fn(v.len(), v.len(), |i, j| if i == j { v[i] } else { 0.0 })
@@ -410,6 +425,23 @@ mod tests {
         assert!(
             (x - 0.75).abs() < 1e-12 && (y - 0.30).abs() < 1e-12,
             "({x}, {y})"
+        );
+    }
+
+    #[test]
+    fn gp_input_names_follow_the_issue_tables() {
+        let names = |name: &str| {
+            let c = cfg(name);
+            let (setup, env) = setup(&c, rbf_policy(&c, 0).unwrap(), 0).unwrap();
+            gp_input_names(&setup.spec, &env)
+        };
+        assert_eq!(
+            names("vil-gic-rbf10"),
+            ["x", "y", "xd", "yd", "t", "k_x", "k_y"]
+        );
+        assert_eq!(
+            names("vilta"),
+            ["x", "y", "xd", "yd", "k_x", "k_y", "dx_ref", "dy_ref"]
         );
     }
 
