@@ -20,8 +20,7 @@ use vicpilco_gp::moments::MmModel;
 use vicpilco_gp::train::initial_hyper;
 use vicpilco_gp::DynamicsModel;
 use vicpilco_learn::data::training_set;
-use vicpilco_learn::step::{Predictor, StepSpec};
-use vicpilco_learn::value::value;
+use vicpilco_learn::step::StepSpec;
 use vicpilco_pilco::policy::{LinearPolicy, Policy};
 
 /// Index of Δẋ among the arm's GP targets.
@@ -162,14 +161,7 @@ where
         if k < from {
             continue;
         }
-        let pred = Predictor::new(
-            &setup.spec,
-            &policy,
-            setup.squash.as_ref(),
-            MmModel::dynamics(&model),
-            setup.prior_shift.as_deref(),
-        )?;
-        let out = value(&pred, &setup.ret, &setup.prediction_starts, false)?;
+        let out = setup.predicted_value(&policy, MmModel::dynamics(&model), false)?;
         let (mean, std) = setup.ret.predicted_return(&out);
         let h = &model.hyp()[DXD];
         print!("{k:>3}{n:>7}{:>9.2}{mean:>8.2}{std:>9.2}", out.j);

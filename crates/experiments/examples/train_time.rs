@@ -20,8 +20,6 @@ use vicpilco_gp::moments::MmModel;
 use vicpilco_gp::sparse::DynamicsReport;
 use vicpilco_gp::DynamicsModel;
 use vicpilco_learn::data::training_set;
-use vicpilco_learn::step::Predictor;
-use vicpilco_learn::value::value;
 use vicpilco_pilco::policy::Policy;
 
 fn main() -> Result<()> {
@@ -131,15 +129,8 @@ fn fit_and_time(args: &[String]) -> Result<()> {
         }
     }
     // The unit of the policy optimisation: one value + gradient of the current policy.
-    let pred = Predictor::new(
-        &setup.spec,
-        &policy,
-        setup.squash.as_ref(),
-        MmModel::dynamics(&model),
-        setup.prior_shift.as_deref(),
-    )?;
     let t0 = Instant::now();
-    let out = value(&pred, &setup.ret, &setup.prediction_starts, true)?;
+    let out = setup.predicted_value(&policy, MmModel::dynamics(&model), true)?;
     println!(
         "one value + gradient of the current policy under the new model: {:.2} s (J = {:.3})",
         t0.elapsed().as_secs_f64(),

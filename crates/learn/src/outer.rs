@@ -229,6 +229,24 @@ where
         })
     }
 
+    /// `policy`'s predicted return (and, with `with_grad`, its gradient) under `model`: the
+    /// setup's step layout, squashing, prior shift and start distributions.
+    pub fn predicted_value(
+        &self,
+        policy: &P,
+        model: MmModel<'_>,
+        with_grad: bool,
+    ) -> Result<ValueOut, LearnError> {
+        let pred = Predictor::new(
+            &self.spec,
+            policy,
+            self.squash.as_ref(),
+            model,
+            self.prior_shift.as_deref(),
+        )?;
+        value(&pred, &self.ret, &self.prediction_starts, with_grad)
+    }
+
     /// The deterministic action of `policy` at a known observation.
     pub fn act(&self, policy: &P, trig: Option<&TrigAug>, t: usize, obs: &[f64]) -> Vec<f64> {
         let aug = augment(&self.spec, trig, obs, t);
@@ -382,15 +400,7 @@ where
             let mut objective = |q: &[f64]| -> Option<(f64, Vec<f64>)> {
                 let p = unscale(q);
                 candidate.set_params(&p).ok()?;
-                let pred = Predictor::new(
-                    &self.spec,
-                    &candidate,
-                    self.squash.as_ref(),
-                    mm,
-                    self.prior_shift.as_deref(),
-                )
-                .ok()?;
-                let out = value(&pred, &self.ret, &self.prediction_starts, true).ok()?;
+                let out = self.predicted_value(&candidate, mm, true).ok()?;
                 observer.objective(ep, out.j);
                 let grad = out.grad?.iter().zip(&scales).map(|(g, s)| g * s).collect();
                 Some((out.j, grad))
@@ -415,14 +425,7 @@ where
             })?;
             self.policy.set_params(&unscale(&result.x))?;
             let optimise_s = t0.elapsed().as_secs_f64();
-            let pred = Predictor::new(
-                &self.spec,
-                &self.policy,
-                self.squash.as_ref(),
-                mm,
-                self.prior_shift.as_deref(),
-            )?;
-            let out = value(&pred, &self.ret, &self.prediction_starts, false)?;
+            let out = self.predicted_value(&self.policy, mm, false)?;
             let (predicted_mean, predicted_std) = self.ret.predicted_return(&out);
             observer.predicted(ep, &out);
             predictions.push(out);
