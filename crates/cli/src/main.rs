@@ -14,7 +14,7 @@ use std::process::ExitCode;
 #[derive(Parser)]
 #[command(
     name = "vicpilco",
-    version,
+    version = vicpilco_experiments::summary::VERSION_TEXT,
     about = "Learn variable impedance control from a handful of trials (PILCO with GP dynamics models)"
 )]
 struct Cli {

@@ -409,6 +409,7 @@ mod tests {
             final_eval: None,
             final_gains: None,
             final_mean_gains: None,
+            sessions: Vec::new(),
         }
     }
 

@@ -31,7 +31,7 @@ use config::{ArmExperiment, PolicyKind};
 use record::{open_jsonl, read_checkpoint, ClaimsOf, PredictionLabels, Recorder, RolloutExtras};
 use std::path::PathBuf;
 use std::time::Instant;
-use summary::{write_json_atomic, Summary};
+use summary::{write_json_atomic, RunSession, Summary};
 use vicpilco_env::classic::{CartPoleScenario, PendulumScenario};
 use vicpilco_env::Environment;
 use vicpilco_learn::outer::{LoopObserver, LoopOutcome, LoopSetup};
@@ -252,12 +252,9 @@ fn run_arm(
     config["simulator"] =
         serde_json::to_value(&arm_cfg).map_err(|e| ExperimentError::Write(e.into()))?;
     // Runs before the flushing (and runs whose rayon pool could not flush) used gradual
-    // underflow; their numbers differ below 1e-300 and their optimiser paths may part.
-    config["subnormals"] = serde_json::json!(if subnormals::flushing_here() {
-        "flushed to zero"
-    } else {
-        "gradual underflow"
-    });
+    // underflow; their numbers differ below 1e-300 and their optimiser paths may part. This is
+    // the latest session's mode; `sessions` lists each session's.
+    config["subnormals"] = serde_json::json!(subnormals::mode_here());
     let meta = |policy: String| RunMeta {
         config: config.clone(),
         identity: identity.clone(),
@@ -313,7 +310,7 @@ where
     let rollouts = open_jsonl(&opts.out.join("rollouts.jsonl"), keep)?;
     let predictions = open_jsonl(&opts.out.join("predictions.jsonl"), keep)?;
     let policies = open_jsonl(&opts.out.join("policies.jsonl"), keep)?;
-    let summary = match &checkpoint {
+    let mut summary = match &checkpoint {
         Some(c) => Summary {
             config: meta.config.clone(),
             ..c.summary.clone()
@@ -336,8 +333,12 @@ where
             final_eval: None,
             final_gains: None,
             final_mean_gains: None,
+            sessions: Vec::new(),
         },
     };
+    summary
+        .sessions
+        .push(RunSession::here(keep.map_or(1, |done| done + 1)));
     let labels = PredictionLabels {
         dt: env.dt(),
         state_names: env.state_names(),

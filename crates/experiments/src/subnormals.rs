@@ -22,6 +22,15 @@ pub fn flushing_here() -> bool {
     std::hint::black_box(f64::MIN_POSITIVE) * std::hint::black_box(0.5) == 0.0
 }
 
+/// The mode of the current thread as run records name it.
+pub fn mode_here() -> &'static str {
+    if flushing_here() {
+        "flushed to zero"
+    } else {
+        "gradual underflow"
+    }
+}
+
 /// Start the global rayon pool with flushing threads if nobody has started it yet, and report
 /// whether every thread of the pool flushes (checked once per process).
 pub fn pool_flushes() -> bool {

@@ -62,6 +62,47 @@ pub struct SeedRule {
     pub seeds: usize,
 }
 
+/// One invocation of a run: the first, then one per `--resume`. Which build computed which
+/// updates, since a resumed run may continue with newer code.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunSession {
+    /// The first policy update this session computed (1 for a fresh run). Updates before the
+    /// first listed session ran with a build that did not record sessions.
+    pub first_update: usize,
+    /// The commit the binary was built from ("+dirty": with uncommitted changes; "unknown":
+    /// built outside git).
+    pub commit: String,
+    /// "flushed to zero" or "gradual underflow" ([`crate::subnormals`]).
+    pub subnormals: String,
+    /// Start of the session, seconds since the Unix epoch.
+    pub started_unix_s: u64,
+}
+
+impl RunSession {
+    /// This process, starting at `first_update`.
+    pub fn here(first_update: usize) -> RunSession {
+        RunSession {
+            first_update,
+            commit: BUILD_COMMIT.to_string(),
+            subnormals: crate::subnormals::mode_here().to_string(),
+            started_unix_s: std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_secs()),
+        }
+    }
+}
+
+/// The commit this crate was built from (see `build.rs`).
+pub const BUILD_COMMIT: &str = env!("VICPILCO_BUILD_COMMIT");
+
+/// `vicpilco --version`: the crate version and the commit.
+pub const VERSION_TEXT: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " (commit ",
+    env!("VICPILCO_BUILD_COMMIT"),
+    ")"
+);
+
 /// The run summary written to `DIR/summary.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Summary {
@@ -101,6 +142,9 @@ pub struct Summary {
     /// number the thesis compares between SIC and GIC (§5-4-2).
     #[serde(default)]
     pub final_mean_gains: Option<[f64; 2]>,
+    /// Every invocation of the run, in order; empty in summaries written before this field.
+    #[serde(default)]
+    pub sessions: Vec<RunSession>,
 }
 
 /// The final policy from fresh starts (`final_eval.jsonl` holds the roll-outs).
@@ -250,6 +294,7 @@ mod tests {
             final_eval: None,
             final_gains: None,
             final_mean_gains: None,
+            sessions: Vec::new(),
         };
         let dir = std::env::temp_dir();
         assert!(matches!(s.write(&dir), Err(WriteError::NonFinite { .. })));

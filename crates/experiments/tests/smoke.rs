@@ -88,10 +88,12 @@ fn read(path: &std::path::Path) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
-/// summary.json without the wall-clock timings, which differ between any two runs.
+/// summary.json without the wall-clock timings, which differ between any two runs, and
+/// without the list of sessions (a resumed run has one more by design).
 fn summary_without_timings(dir: &std::path::Path) -> serde_json::Value {
     let mut v: serde_json::Value = serde_json::from_str(&read(&dir.join("summary.json"))).unwrap();
     v.as_object_mut().unwrap().remove("wall_s");
+    v.as_object_mut().unwrap().remove("sessions");
     for e in v["episodes"].as_array_mut().unwrap() {
         let e = e.as_object_mut().unwrap();
         e.remove("train_s");
@@ -226,6 +228,31 @@ fn vil_gic_quick_run_writes_every_file_and_resumes_bit_for_bit() {
         summary_without_timings(&full),
         summary_without_timings(&split)
     );
+    // Each invocation is listed with the first update it computed and the build that ran it.
+    let sessions = |dir: &std::path::Path| -> Vec<(u64, String, String)> {
+        let v: serde_json::Value = serde_json::from_str(&read(&dir.join("summary.json"))).unwrap();
+        v["sessions"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| {
+                assert!(s["started_unix_s"].as_u64().unwrap() > 1_600_000_000);
+                (
+                    s["first_update"].as_u64().unwrap(),
+                    s["commit"].as_str().unwrap().to_string(),
+                    s["subnormals"].as_str().unwrap().to_string(),
+                )
+            })
+            .collect()
+    };
+    let this_build = (
+        vicpilco_experiments::summary::BUILD_COMMIT.to_string(),
+        "flushed to zero".to_string(),
+    );
+    let at = |first: u64| (first, this_build.0.clone(), this_build.1.clone());
+    assert_eq!(sessions(&full), [at(1)]);
+    assert_eq!(sessions(&split), [at(1), at(2)]);
+    assert!(!this_build.0.is_empty());
     for file in [
         "rollouts.jsonl",
         "predictions.jsonl",

@@ -111,6 +111,15 @@ pub(crate) struct Summary {
     pub thesis_reference: Option<Vec<Claim>>,
     /// Arm runs: mean (k_x, k_y) of the last roll-out over the whole episode.
     pub final_mean_gains: Option<[f64; 2]>,
+    /// Each invocation of the run (empty in summaries written before they were recorded).
+    pub sessions: Vec<Session>,
+}
+
+/// One invocation of a run: the first update it computed and the build that ran it.
+pub(crate) struct Session {
+    pub first_update: u64,
+    pub commit: String,
+    pub subnormals: String,
 }
 
 impl Summary {
@@ -128,6 +137,42 @@ impl Summary {
             (None, false) => "not solved".into(),
             (None, true) => "–".into(),
         }
+    }
+
+    /// Which build computed which updates: "updates 1–14: abc (gradual underflow); 15–25:
+    /// def (flushed to zero)", with a leading "not recorded" range for older sessions.
+    pub fn sessions_text(&self) -> String {
+        let range = |a: u64, b: u64| {
+            if a == b {
+                format!("update {a}")
+            } else {
+                format!("updates {a}–{b}")
+            }
+        };
+        let Some(first) = self.sessions.first() else {
+            return "not recorded".into();
+        };
+        let mut parts = Vec::new();
+        if first.first_update > 1 {
+            parts.push(format!(
+                "{}: not recorded",
+                range(1, first.first_update - 1)
+            ));
+        }
+        for (i, s) in self.sessions.iter().enumerate() {
+            let end = self
+                .sessions
+                .get(i + 1)
+                .map_or(self.episodes.len() as u64, |next| {
+                    next.first_update.saturating_sub(1)
+                });
+            // A session stopped (or resumed with nothing left) before it finished an update.
+            if end >= s.first_update {
+                let what = format!("{} ({})", s.commit, s.subnormals);
+                parts.push(format!("{}: {what}", range(s.first_update, end)));
+            }
+        }
+        parts.join("; ")
     }
 
     /// Wall time over policy updates (initial roll-outs included in the wall time).
@@ -365,6 +410,19 @@ fn parse_summary(n: Node<'_>) -> Result<Summary, ReportError> {
             t.map(|t| t.map_array(parse_claim)).transpose()
         })?,
         final_mean_gains: n.with("final_mean_gains", |g| g.map(parse_pair).transpose())?,
+        sessions: n.with("sessions", |s| {
+            s.map(|s| s.map_array(parse_session))
+                .transpose()
+                .map(Option::unwrap_or_default)
+        })?,
+    })
+}
+
+fn parse_session(n: Node<'_>) -> Result<Session, ReportError> {
+    Ok(Session {
+        first_update: n.req_u64("first_update")?,
+        commit: n.req("commit", |c| c.string())?,
+        subnormals: n.req("subnormals", |c| c.string())?,
     })
 }
 

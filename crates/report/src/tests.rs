@@ -433,3 +433,43 @@ fn action_statistics_of_a_constant_gain_and_of_missing_components() {
     };
     assert_eq!(empty.action_mean_std(0), None);
 }
+
+#[test]
+fn totals_say_which_build_computed_which_updates() {
+    let tmp = TempDir::new("sessions");
+    write_run(tmp.path(), Kind::Vil);
+    write_report(tmp.path()).unwrap();
+    let code_row = |page: &str| {
+        md_rows(page, "## Totals")
+            .into_iter()
+            .find(|r| r[0].starts_with("code"))
+            .map(|r| r[1].to_string())
+            .expect("a code row")
+    };
+    assert_eq!(code_row(&markdown(tmp.path())), "not recorded");
+
+    let summary = tmp.path().join("summary.json");
+    let mut n = 0;
+    edit_json(&summary, |v| {
+        n = v["episodes"].as_array().unwrap().len();
+        let session = |first: u64, commit: &str, mode: &str| {
+            serde_json::json!({"first_update": first, "commit": commit, "subnormals": mode,
+                               "started_unix_s": 1_800_000_000u64})
+        };
+        // Started by an older build, resumed at 2, stopped before finishing update 3,
+        // resumed at 3 again.
+        v["sessions"] = serde_json::json!([
+            session(2, "aaa", "gradual underflow"),
+            session(3, "bbb", "flushed to zero"),
+            session(3, "ccc", "flushed to zero"),
+        ]);
+    });
+    assert!(n >= 4, "the synthetic run has {n} updates");
+    write_report(tmp.path()).unwrap();
+    let expected = format!(
+        "update 1: not recorded; update 2: aaa (gradual underflow); updates 3–{n}: ccc (flushed \
+         to zero)"
+    );
+    assert_eq!(code_row(&markdown(tmp.path())), expected);
+    assert!(html(tmp.path()).contains(&expected));
+}
