@@ -1,6 +1,6 @@
 //! The run directory as read from disk (format: the files `crates/experiments` writes, listed
-//! in the crate docs and the README). Only summary.json is required; everything else may be absent in runs made
-//! before it existed, and its absence becomes a note in the report.
+//! in the crate docs and the README). Only summary.json is required; everything else may be
+//! absent in runs made before it existed, and its absence becomes a note in the report.
 
 use crate::json::Node;
 use crate::ReportError;
