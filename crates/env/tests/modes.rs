@@ -102,3 +102,47 @@ fn object_safe() {
         assert!((s.info.t - 0.1).abs() < 1e-12);
     }
 }
+
+/// Pushing on with Δx at its limit after the peg meets the wall face: a reference integrated
+/// from the start runs on into the wall and the force grows with it (by k · v_max · Δt =
+/// 12.5 N per step at 250 N/m); one restarted at the measured position each step stays within
+/// v_max · Δt of the TCP, so the force stays where it is (the stiffness's k · v_max · Δt plus
+/// the contact damping's B_d · v_max).
+#[test]
+fn measured_reference_origin_keeps_the_force_against_a_wall_from_growing() {
+    use vicpilco_env::arm::ReferenceOrigin;
+    let forces = |origin: ReferenceOrigin| {
+        let cfg = ArmConfig {
+            mode: ActionMode::Vilta {
+                delta_max: 0.0025,
+                delta_tick: 0.005,
+                origin,
+            },
+            ..ArmConfig::ideal()
+        };
+        let mut env = ArmEnv::new(cfg).unwrap();
+        env.reset(&[0.5, 0.0, 0.0, 0.0, 0.0, 0.0], 1).unwrap();
+        let mut f = Vec::new();
+        for _ in 0..40 {
+            let s = env.step(&[250.0, 250.0, 0.0025, 0.0]).unwrap();
+            // At the face (x = 0.65 m) after a few steps.
+            f.push((s.info.true_state[0], s.observation[4]));
+        }
+        f
+    };
+    let integrated = forces(ReferenceOrigin::Start);
+    let measured = forces(ReferenceOrigin::Measured);
+    for f in [&integrated, &measured] {
+        assert!(
+            f[20..].iter().all(|(x, _)| (x - 0.65).abs() < 0.01),
+            "{f:?}"
+        );
+    }
+    let growth = |f: &[(f64, f64)]| f[39].1 - f[20].1;
+    assert!(
+        (growth(&integrated) - 19.0 * 12.5).abs() < 25.0,
+        "integrated: {integrated:?}"
+    );
+    assert!(growth(&measured).abs() < 5.0, "measured: {measured:?}");
+    assert!(measured[39].1 < integrated[39].1 / 2.0);
+}

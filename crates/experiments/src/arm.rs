@@ -14,7 +14,9 @@ use faer::Mat;
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use std::sync::Mutex;
-use vicpilco_env::arm::{ActionMode, ArmConfig, ArmEnv, OuParams, RefPoint, ViaPlan};
+use vicpilco_env::arm::{
+    ActionMode, ArmConfig, ArmEnv, OuParams, RefPoint, ReferenceOrigin, ViaPlan,
+};
 use vicpilco_env::Environment;
 use vicpilco_gp::sparse::SparseTrainOptions;
 use vicpilco_gp::train::Wolfe;
@@ -73,6 +75,7 @@ pub fn arm_config(cfg: &ArmExperiment) -> ArmConfig {
         arm.mode = ActionMode::Vilta {
             delta_max: cfg.policy.delta_max.unwrap_or(0.0),
             delta_tick: v.delta_tick,
+            origin: v.reference,
         };
         arm.geometry = arm.geometry.shifted(v.geometry_shift_x, 0.0);
     }
@@ -258,6 +261,8 @@ fn explore_policy(cfg: &ArmExperiment, arm: &ArmConfig, ou: OuParams) -> Explore
     match (&cfg.vilta, cfg.initial.scan.is_some()) {
         (Some(v), true) => {
             let ticks_per_step = dt / v.delta_tick;
+            let delta_max = cfg.policy.delta_max.unwrap_or(0.0);
+            let v = v.clone();
             let cfg = cfg.clone();
             let arm = arm.clone();
             // The scan starts where the arm starts (observed at t = 0).
@@ -270,12 +275,16 @@ fn explore_policy(cfg: &ArmExperiment, arm: &ArmConfig, ou: OuParams) -> Explore
                 }
                 let p = guard.as_ref().expect("set above");
                 let (a, b) = (p(t as f64 * dt), p((t + 1) as f64 * dt));
-                vec![
-                    k[0],
-                    k[1],
-                    (b.x[0] - a.x[0]) / ticks_per_step,
-                    (b.x[1] - a.x[1]) / ticks_per_step,
-                ]
+                // A reference restarted at the measured position each step aims at the path's
+                // next point from there; one integrated from the start follows the path's
+                // increments.
+                let from = match v.reference {
+                    ReferenceOrigin::Start => [a.x[0], a.x[1]],
+                    ReferenceOrigin::Measured => [obs[0], obs[1]],
+                };
+                let delta =
+                    |i: usize| ((b.x[i] - from[i]) / ticks_per_step).clamp(-delta_max, delta_max);
+                vec![k[0], k[1], delta(0), delta(1)]
             })
         }
         _ => Box::new(move |seed, t, _obs| ou.profiles(horizon, seed)[t.min(horizon - 1)].to_vec()),

@@ -235,6 +235,14 @@ pub struct ViltaConfig {
     pub rollouts_per_iteration: usize,
     /// Fresh starts the final policy is evaluated on (0: none).
     pub evaluation_starts: usize,
+    /// Where the reference integration starts: `"start"` (issue 5: the whole episode from the
+    /// start pose) or `"measured"` (ours: at each step from the measured position, which keeps
+    /// the reference from drifting into a surface; see EXPERIMENTS.md).
+    #[serde(
+        default,
+        skip_serializing_if = "vicpilco_env::arm::ReferenceOrigin::is_start"
+    )]
+    pub reference: vicpilco_env::arm::ReferenceOrigin,
 }
 
 /// The config text and file label of a shipped name (aliases resolved).
@@ -513,6 +521,9 @@ impl ArmExperiment {
         }
         if self.gp.force_inputs {
             keys.push("gp.force_inputs");
+        }
+        if self.vilta.as_ref().is_some_and(|v| !v.reference.is_start()) {
+            keys.push("vilta.reference");
         }
         if self.controller == ControllerKind::Sic && self.policy.kind == PolicyKind::Rbf {
             keys.push("policy.n_basis");

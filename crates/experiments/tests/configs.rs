@@ -226,3 +226,35 @@ fn force_inputs_add_the_contact_forces_to_the_gp_inputs() {
     let (base_setup, _) = arm::setup(&base, arm::rbf_policy(&base, 1).unwrap(), 1).unwrap();
     assert_eq!(base_setup.spec.dyn_inputs, vec![0, 1, 2, 3]);
 }
+
+#[test]
+fn vilta_reference_origin_is_the_start_unless_set_and_then_an_ours_key() {
+    use vicpilco_env::arm::{ActionMode, ReferenceOrigin};
+    let origin = |cfg: &config::ArmExperiment| match arm::arm_config(cfg).mode {
+        ActionMode::Vilta { origin, .. } => origin,
+        ActionMode::Vil => panic!("a VILTA config"),
+    };
+    for name in ["vilta", "vilta-var"] {
+        let base = shipped(name);
+        assert_eq!(origin(&base), ReferenceOrigin::Start);
+        assert!(!base.ours_keys().contains(&"vilta.reference"));
+        // The default is not written, so runs made before the option keep their identity.
+        let written = serde_json::to_value(&base).unwrap();
+        assert!(written["vilta"].get("reference").is_none(), "{written}");
+    }
+    let text = config::shipped("vilta").unwrap().1;
+    let set = |value: &str| {
+        config::parse(
+            &text.replace("reference = \"start\"", &format!("reference = {value}")),
+            "test.toml",
+        )
+    };
+    let cfg = set("\"measured\"").unwrap();
+    assert_eq!(origin(&cfg), ReferenceOrigin::Measured);
+    assert!(cfg.ours_keys().contains(&"vilta.reference"));
+    let err = set("\"elsewhere\"").unwrap_err().to_string();
+    assert!(
+        err.contains("reference") && err.contains("test.toml"),
+        "{err}"
+    );
+}

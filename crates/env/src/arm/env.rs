@@ -2,7 +2,7 @@
 //! Δy_ref)), observation s = (x, y, ẋ, ẏ, f_x, f_y) from the noisy readings.
 
 use super::kinematics::ik;
-use super::params::{ActionMode, ArmConfig};
+use super::params::{ActionMode, ArmConfig, ReferenceOrigin};
 use super::plan::RefPoint;
 use super::sensors::Reading;
 use super::sim::{ArmSim, TickStatus};
@@ -216,8 +216,16 @@ impl Environment for ArmEnv {
         }
         self.check_action(action)?;
         let k = [action[0], action[1]];
-        if let ActionMode::Vilta { delta_tick, .. } = self.cfg.mode {
+        if let ActionMode::Vilta {
+            delta_tick, origin, ..
+        } = self.cfg.mode
+        {
             self.vilta_xd = [action[2] / delta_tick, action[3] / delta_tick, 0.0];
+            if origin == ReferenceOrigin::Measured {
+                let est = impedance::task_state(sim.model(), &sim.reading().q, &sim.reading().qd);
+                self.vilta_x[0] = est.x[0];
+                self.vilta_x[1] = est.x[1];
+            }
         }
         let ticks = self.cfg.ticks_per_step();
         let mut singular = false;

@@ -277,21 +277,47 @@ pub enum ActionMode {
     /// VIL: a = (k_x, k_y); the reference comes from [`ArmConfig::reference`], indexed by time.
     Vil,
     /// VILTA: a = (k_x, k_y, Δx_ref, Δy_ref). Δ is metres per `delta_tick` seconds (eq. 4-24):
-    /// ẋ_v = Δ/delta_tick, integrated every control tick, ẍ_v = 0, starting at the start pose.
+    /// ẋ_v = Δ/delta_tick, integrated every control tick, ẍ_v = 0, from `origin`.
     Vilta {
         /// Largest allowed |Δ| (m). Thesis Table 5-6: 0.0025.
         delta_max: f64,
         /// The tick Δ refers to (s). Thesis: 5 ms (the 200 Hz controller period).
         delta_tick: f64,
+        /// Where the integration of the reference starts.
+        #[serde(default, skip_serializing_if = "ReferenceOrigin::is_start")]
+        origin: ReferenceOrigin,
     },
 }
 
+/// Where VILTA's reference position x_v comes from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ReferenceOrigin {
+    /// Integrated over the whole episode from the start pose (issue 5). x_v is then a state
+    /// the observations do not show: after contact it keeps moving into the surface and the
+    /// contact force grows with it.
+    #[default]
+    Start,
+    /// Restarted at the measured TCP position (the observation the policy acted on) at each
+    /// learning step, then integrated over the step (ours). x_v − x stays within
+    /// v_max · Δt, so the spring force of the impedance is bounded by k · v_max · Δt.
+    Measured,
+}
+
+impl ReferenceOrigin {
+    /// The issue's default (serialised configs omit it, so their identity stays the same).
+    pub fn is_start(&self) -> bool {
+        *self == ReferenceOrigin::Start
+    }
+}
+
 impl ActionMode {
-    /// VILTA with the thesis's limits (Table 5-6).
+    /// VILTA with the thesis's limits (Table 5-6), integrated from the start pose.
     pub fn vilta() -> ActionMode {
         ActionMode::Vilta {
             delta_max: 0.0025,
             delta_tick: 0.005,
+            origin: ReferenceOrigin::Start,
         }
     }
 }
@@ -429,6 +455,7 @@ impl ArmConfig {
         if let ActionMode::Vilta {
             delta_max,
             delta_tick,
+            ..
         } = self.mode
         {
             positive("mode.delta_max", delta_max)?;
