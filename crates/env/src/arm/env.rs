@@ -222,9 +222,9 @@ impl Environment for ArmEnv {
         {
             self.vilta_xd = [action[2] / delta_tick, action[3] / delta_tick, 0.0];
             if origin == ReferenceOrigin::Measured {
-                let est = impedance::task_state(sim.model(), &sim.reading().q, &sim.reading().qd);
-                self.vilta_x[0] = est.x[0];
-                self.vilta_x[1] = est.x[1];
+                // From the position the policy observed.
+                let obs = self.observation(sim.reading());
+                self.vilta_x[..2].copy_from_slice(&obs[..2]);
             }
         }
         let ticks = self.cfg.ticks_per_step();

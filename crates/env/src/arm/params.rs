@@ -300,7 +300,8 @@ pub enum ReferenceOrigin {
     Start,
     /// Restarted at the measured TCP position (the observation the policy acted on) at each
     /// learning step, then integrated over the step (ours). x_v − x stays within
-    /// v_max · Δt, so the spring force of the impedance is bounded by k · v_max · Δt.
+    /// v_max · Δt, so the impedance's spring force stays within k · v_max · Δt; its damping
+    /// adds B_d · ẋ_v as with either origin.
     Measured,
 }
 
