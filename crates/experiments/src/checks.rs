@@ -221,6 +221,14 @@ pub fn thesis_checks(
     }
     if cfg.task == Task::Vil && cfg.policy.kind == PolicyKind::Linear {
         let first = streak_start(s, 5);
+        // Decided as soon as the updates left before 20 cannot complete a streak of 5.
+        let trailing = s
+            .episodes
+            .iter()
+            .rev()
+            .take_while(|e| e.success_fraction >= 1.0)
+            .count();
+        let out_of_reach = n >= 20 || trailing + (20 - n) < 5;
         out.push(check(
             "five_inserting_by_20",
             "5 consecutive inserting updates by update 20",
@@ -229,7 +237,7 @@ pub fn thesis_checks(
             if first.is_some_and(|f| f + 4 <= 20) {
                 Some(true)
             } else {
-                (n >= 20).then_some(false)
+                out_of_reach.then_some(false)
             },
         ));
     }
@@ -459,6 +467,19 @@ mod tests {
         let early: Vec<_> = (1..=25).map(|i| (70.0, i >= 12)).collect();
         let checks = thesis_checks("vil-gic-lin", &c, 25, &summary(&early));
         assert_eq!(verdict(&checks, "5 consecutive"), Some(true));
+        // Stopped part-way: open while updates 16-20 could still all insert, failed once not.
+        let part = |n: usize, inserting: &[usize]| {
+            let eps: Vec<_> = (1..=n).map(|i| (70.0, inserting.contains(&i))).collect();
+            verdict(
+                &thesis_checks("vil-gic-lin", &c, 25, &summary(&eps)),
+                "5 consecutive",
+            )
+        };
+        assert_eq!(part(15, &[]), None);
+        assert_eq!(part(16, &[16]), None);
+        assert_eq!(part(16, &[]), Some(false));
+        assert_eq!(part(17, &[11, 12, 13, 16]), Some(false));
+        assert_eq!(part(17, &[13, 14, 15, 16, 17]), Some(true));
     }
 
     #[test]
