@@ -148,11 +148,7 @@ fn fmt_opt(v: Option<f64>) -> String {
 fn streak_start(s: &Summary, streak: usize) -> Option<usize> {
     let mut run = 0;
     for e in &s.episodes {
-        run = if e.success_fraction >= 1.0 {
-            run + 1
-        } else {
-            0
-        };
+        run = if e.all_inserted() { run + 1 } else { 0 };
         if run >= streak {
             return Some(e.index + 1 - streak);
         }
@@ -182,7 +178,7 @@ pub fn thesis_checks(
             .iter()
             .filter(|e| (6..=10).contains(&e.index))
             .collect();
-        let inserted = window.iter().filter(|e| e.success_fraction >= 1.0).count();
+        let inserted = window.iter().filter(|e| e.all_inserted()).count();
         out.push(check(
             "updates_6_10_insert",
             "every roll-out of updates 6-10 inserts",
@@ -226,7 +222,7 @@ pub fn thesis_checks(
             .episodes
             .iter()
             .rev()
-            .take_while(|e| e.success_fraction >= 1.0)
+            .take_while(|e| e.all_inserted())
             .count();
         let out_of_reach = n >= 20 || trailing + (20 - n) < 5;
         out.push(check(
@@ -250,7 +246,7 @@ pub fn thesis_checks(
             full.then(|| final_return.is_some_and(|r| r <= 90.0)),
         ));
         let tail: Vec<_> = s.episodes.iter().rev().take(5).collect();
-        let ok = tail.iter().filter(|e| e.success_fraction >= 1.0).count();
+        let ok = tail.iter().filter(|e| e.all_inserted()).count();
         out.push(check(
             "sic_last_5_insert",
             "the last 5 updates insert",

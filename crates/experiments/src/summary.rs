@@ -25,9 +25,21 @@ impl std::ops::Deref for EpisodeSummary {
     }
 }
 
+impl EpisodeSummary {
+    /// Every roll-out of the update succeeded: the thesis's "inserting" update, and the one
+    /// rule the claims count by.
+    pub fn all_inserted(&self) -> bool {
+        all_succeeded(self.success_fraction)
+    }
+}
+
+fn all_succeeded(success_fraction: f64) -> bool {
+    success_fraction >= 1.0
+}
+
 /// The colour of an update with this fraction of successful roll-outs.
 pub fn colour(success_fraction: f64) -> &'static str {
-    if success_fraction >= 1.0 {
+    if all_succeeded(success_fraction) {
         "green"
     } else if success_fraction > 0.0 {
         "yellow"
