@@ -61,7 +61,8 @@ fn diag(v: &[f64]) -> Mat<f64> {
     Mat::from_fn(v.len(), v.len(), |i, j| if i == j { v[i] } else { 0.0 })
 }
 
-/// The simulator configuration of an experiment: the default arm (noise and 15 % mismatch on)
+/// The simulator configuration of an experiment: the default arm (15 % mismatch on, sensor
+/// noise as the config says)
 /// with the experiment's controller, step, horizon and, for VILTA, action layout and shifted
 /// scene.
 pub fn arm_config(cfg: &ArmExperiment) -> ArmConfig {
@@ -69,6 +70,7 @@ pub fn arm_config(cfg: &ArmExperiment) -> ArmConfig {
         controller: cfg.controller,
         step_dt: cfg.dt,
         horizon: cfg.horizon,
+        noise: cfg.sensor_noise,
         ..ArmConfig::default()
     };
     if let (Task::Vilta, Some(v)) = (cfg.task, &cfg.vilta) {

@@ -91,6 +91,20 @@ pub struct ArmExperiment {
     /// VILTA only.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vilta: Option<ViltaConfig>,
+    /// The simulated sensors' noise (§5-2: 0.1° per encoder, 0.1°/s per tachometer, 0.1 N per
+    /// force axis). Every shipped config keeps it on; `false` is a diagnostic (ours) that
+    /// shows how much of a run's behaviour the measurement noise in the GP's inputs and
+    /// targets causes (EXPERIMENTS.md, "Runs without sensor noise").
+    #[serde(default = "sensor_noise_on", skip_serializing_if = "is_on")]
+    pub sensor_noise: bool,
+}
+
+fn sensor_noise_on() -> bool {
+    true
+}
+
+fn is_on(b: &bool) -> bool {
+    *b
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -521,6 +535,9 @@ impl ArmExperiment {
         }
         if self.gp.force_inputs {
             keys.push("gp.force_inputs");
+        }
+        if !self.sensor_noise {
+            keys.push("sensor_noise");
         }
         if self.vilta.as_ref().is_some_and(|v| !v.reference.is_start()) {
             keys.push("vilta.reference");

@@ -258,3 +258,25 @@ fn vilta_reference_origin_is_the_start_unless_set_and_then_an_ours_key() {
         "{err}"
     );
 }
+
+#[test]
+fn sensor_noise_is_on_unless_switched_off_and_then_an_ours_key() {
+    for name in ["vil-gic-rbf10", "vil-sic", "vilta"] {
+        let base = shipped(name);
+        assert!(base.sensor_noise && arm::arm_config(&base).noise, "{name}");
+        assert!(!base.ours_keys().contains(&"sensor_noise"));
+        // Not written while on, so runs made before the key keep their identity.
+        let written = serde_json::to_value(&base).unwrap();
+        assert!(written.get("sensor_noise").is_none(), "{written}");
+    }
+    let text = config::shipped("vil-gic-rbf10").unwrap().1;
+    let set = |value: &str| config::parse(&format!("sensor_noise = {value}\n{text}"), "test.toml");
+    let off = set("false").unwrap();
+    assert!(!arm::arm_config(&off).noise);
+    assert!(off.ours_keys().contains(&"sensor_noise"));
+    let err = set("\"no\"").unwrap_err().to_string();
+    assert!(
+        err.contains("sensor_noise") && err.contains("test.toml"),
+        "{err}"
+    );
+}
