@@ -10,7 +10,7 @@ use vicpilco_learn::outer::{derive_seed, rollout, LoopOutcome};
 use vicpilco_pilco::policy::Policy;
 // The vil-sic claim that needs a GIC run of the same seed: `vicpilco acceptance` decides it by
 // comparing the two runs' `final_mean_gains` k_y.
-use vicpilco_report::SIC_MEAN_K_Y_ABOVE_GIC;
+use vicpilco_report::{FINAL_BELOW_INITIAL, SIC_MEAN_K_Y_ABOVE_GIC};
 
 /// Stiffness (N/m) of the constant-gain comparison: the middle of the VIL range.
 pub const CONSTANT_GAIN: f64 = 127.5;
@@ -271,7 +271,7 @@ pub fn thesis_checks(
     if cfg.task == Task::Vil {
         let bar = [s.initial_return, s.constant_gain_return];
         out.push(check_every_run(
-            "final_below_initial_and_constant",
+            FINAL_BELOW_INITIAL,
             "final return below the initial OU roll-out's and constant gains' (127.5 N/m)",
             "learning improves on the initial profiles",
             format!(
@@ -537,10 +537,7 @@ mod tests {
             }
             let rule = |id: &str| checks.iter().find(|c| c.id == id).map(|c| c.across_seeds);
             if name.starts_with("vil-") {
-                assert_eq!(
-                    rule("final_below_initial_and_constant"),
-                    Some(Some(EVERY_RUN))
-                );
+                assert_eq!(rule(FINAL_BELOW_INITIAL), Some(Some(EVERY_RUN)));
             }
             if name == "vil-sic" {
                 assert_eq!(rule(SIC_MEAN_K_Y_ABOVE_GIC), Some(Some(THREE_OF_FIVE)));

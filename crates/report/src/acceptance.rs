@@ -15,6 +15,9 @@ use std::path::{Path, PathBuf};
 /// Id of the vil-sic claim decided here against the same seed's GIC run; the experiments crate
 /// gives its claim this id.
 pub const SIC_MEAN_K_Y_ABOVE_GIC: &str = "sic_mean_k_y_above_gic";
+/// Id of "final return below the initial roll-out's and constant gains'", made by every VIL run
+/// and decided once the run has all its planned updates.
+pub const FINAL_BELOW_INITIAL: &str = "final_below_initial_and_constant";
 
 struct RunSummary {
     dir: PathBuf,
@@ -168,7 +171,8 @@ fn section(
 }
 
 /// SIC's whole-episode mean k_y against the GIC run of the same seed (vil-gic-rbf10 first, then
-/// the other GIC configurations by name), decided only when both were recorded.
+/// the other GIC configurations by name), decided only when both runs recorded their gains
+/// and have all their planned updates: a stopped run's last gains are not its final ones.
 fn paired_gic_k_y(
     sic: &Summary,
     all: &BTreeMap<String, Vec<RunSummary>>,
@@ -179,20 +183,36 @@ fn paired_gic_k_y(
     let preferred = ["vil-gic-rbf10", "vil-gic"];
     let mut gic_names: Vec<&String> = all.keys().filter(|k| k.starts_with("vil-gic")).collect();
     gic_names.sort_by_key(|k| (!preferred.contains(&k.as_str()), k.as_str()));
-    let paired = gic_names.iter().find_map(|name| {
-        all[*name]
-            .iter()
-            .find(|r| r.summary.seed == sic.seed)
-            .and_then(|r| r.summary.final_mean_gains.map(|g| (name, g)))
-    });
+    let candidates: Vec<(&String, &Summary, [f64; 2])> = gic_names
+        .iter()
+        .flat_map(|name| {
+            all[*name]
+                .iter()
+                .filter(|r| r.summary.seed == sic.seed)
+                .filter_map(move |r| r.summary.final_mean_gains.map(|g| (*name, &r.summary, g)))
+        })
+        .collect();
+    let paired = candidates
+        .iter()
+        .find(|(_, s, _)| complete(s))
+        .or(candidates.first());
     match paired {
-        Some((name, gic)) => (
-            format!(
+        Some((name, gic, gains)) => {
+            let text = format!(
                 "{:.0} vs {:.0} N/m ({name} seed {})",
-                sic_gains[1], gic[1], sic.seed
-            ),
-            Some(sic_gains[1] > gic[1]),
-        ),
+                sic_gains[1], gains[1], sic.seed
+            );
+            let unfinished = [("SIC", sic), ("GIC", *gic)]
+                .iter()
+                .filter(|(_, s)| !complete(s))
+                .map(|(which, s)| format!("{which} run stopped at update {}", s.episodes.len()))
+                .collect::<Vec<_>>();
+            if unfinished.is_empty() {
+                (text, Some(sic_gains[1] > gains[1]))
+            } else {
+                (format!("{text}; {}", unfinished.join(", ")), None)
+            }
+        }
         None => (
             format!(
                 "{:.0} N/m; no vil-gic run of seed {} given",
@@ -201,6 +221,15 @@ fn paired_gic_k_y(
             None,
         ),
     }
+}
+
+/// Whether a VIL run has all its planned updates: its "final return below the initial" claim,
+/// which every VIL run makes, is decided only then.
+fn complete(s: &Summary) -> bool {
+    s.thesis_reference
+        .iter()
+        .flatten()
+        .any(|c| claim_key(c) == FINAL_BELOW_INITIAL && c.pass.is_some())
 }
 
 /// "3 of 5 seeds", "every run (5 seeds)", or a dash for summaries that predate the rules.
@@ -282,8 +311,14 @@ mod tests {
                 None,
                 false,
             ),
-            claim("final_below", "final below initial", "x", Some(true), true),
+            finished(true),
         ]
+    }
+
+    /// The every-VIL-run claim, decided (`done`) only once a run has all its planned updates.
+    fn finished(done: bool) -> Value {
+        let pass = done.then_some(true);
+        claim(FINAL_BELOW_INITIAL, "final below initial", "x", pass, true)
     }
 
     /// The table row whose first cell is `claim`, split into its cells.
@@ -306,14 +341,48 @@ mod tests {
             write_summary(root, "sic3", "vil-sic", 3, 240.0, sic_claims(95.0)),
             write_summary(root, "sic1", "vil-sic", 1, 270.0, sic_claims(72.5)),
             write_summary(root, "sic2", "vil-sic", 2, 120.0, sic_claims(80.0)),
+            write_summary(root, "sic4", "vil-sic", 4, 240.0, sic_claims(70.0)),
             // Seed 1 has two GIC runs: rbf10 is the comparison, not rbf25.
-            write_summary(root, "rbf25-1", "vil-gic-rbf25", 1, 300.0, vec![]),
-            write_summary(root, "rbf10-1", "vil-gic-rbf10", 1, 200.0, vec![]),
-            write_summary(root, "rbf25-2", "vil-gic-rbf25", 2, 130.0, vec![]),
+            write_summary(
+                root,
+                "rbf25-1",
+                "vil-gic-rbf25",
+                1,
+                300.0,
+                vec![finished(true)],
+            ),
+            write_summary(
+                root,
+                "rbf10-1",
+                "vil-gic-rbf10",
+                1,
+                200.0,
+                vec![finished(true)],
+            ),
+            write_summary(
+                root,
+                "rbf25-2",
+                "vil-gic-rbf25",
+                2,
+                130.0,
+                vec![finished(true)],
+            ),
+            // A run from before the claims were recorded.
+            write_summary(root, "lin-1", "vil-gic-lin", 1, 50.0, vec![]),
+            // Seed 4's GIC run was stopped early: its last gains are not its final ones.
+            write_summary(
+                root,
+                "rbf10-4",
+                "vil-gic-rbf10",
+                4,
+                100.0,
+                vec![finished(false)],
+            ),
         ];
         let md = acceptance_markdown(&dirs).unwrap();
         assert!(md.contains("## vil-sic"), "{md}");
-        assert!(md.contains("| claim | needs | seed 1 | seed 2 | seed 3 | passing | verdict |"));
+        assert!(md
+            .contains("| claim | needs | seed 1 | seed 2 | seed 3 | seed 4 | passing | verdict |"));
         assert_eq!(
             row_of(&md, "final return <= 90"),
             [
@@ -322,8 +391,9 @@ mod tests {
                 "72.5 (pass)",
                 "80.0 (pass)",
                 "95.0 (fail)",
-                "2 of 3",
-                "undecided"
+                "70.0 (pass)",
+                "3 of 4",
+                "pass"
             ]
         );
         assert_eq!(
@@ -334,15 +404,23 @@ mod tests {
                 "270 vs 200 N/m (vil-gic-rbf10 seed 1) (pass)",
                 "120 vs 130 N/m (vil-gic-rbf25 seed 2) (fail)",
                 "240 N/m; no vil-gic run of seed 3 given (undecided)",
-                "1 of 3",
+                "240 vs 100 N/m (vil-gic-rbf10 seed 4); GIC run stopped at update 0 (undecided)",
+                "1 of 4",
                 "undecided"
             ]
         );
-        let every = row_of(&md, "final below initial");
+        let sic_section = &md[md.find("## vil-sic").unwrap()..];
+        let every = row_of(sic_section, "final below initial");
         assert_eq!(every[1], "every run (5 seeds)");
-        assert_eq!(every[5..], ["3 of 3", "undecided"]);
-        assert!(
-            md.contains("## vil-gic-rbf10") && md.contains("These runs record no thesis claims")
+        assert_eq!(every[6..], ["4 of 4", "undecided"]);
+        // The stopped GIC run counts as neither pass nor fail.
+        let gic = row_of(
+            &md[md.find("## vil-gic-rbf10").unwrap()..],
+            "final below initial",
+        );
+        assert_eq!(
+            gic[2..],
+            ["x (pass)", "x (undecided)", "1 of 2", "undecided"]
         );
     }
 
