@@ -61,10 +61,9 @@ fn diag(v: &[f64]) -> Mat<f64> {
     Mat::from_fn(v.len(), v.len(), |i, j| if i == j { v[i] } else { 0.0 })
 }
 
-/// The simulator configuration of an experiment: the default arm (15 % mismatch on, sensor
-/// noise as the config says)
-/// with the experiment's controller, step, horizon and, for VILTA, action layout and shifted
-/// scene.
+/// The simulator configuration of an experiment: the default arm (15 % mismatch on) with the
+/// experiment's sensor noise, controller, step, horizon and, for VILTA, action layout and
+/// shifted scene.
 pub fn arm_config(cfg: &ArmExperiment) -> ArmConfig {
     let mut arm = ArmConfig {
         controller: cfg.controller,
