@@ -377,6 +377,7 @@ pub fn setup<P>(
                 ..SparseTrainOptions::default()
             },
         },
+        model_selection: cfg.gp.model_selection,
         optimiser: OptimiserOptions {
             length: cfg.optimiser.length,
             mfepls: cfg.optimiser.mfepls,

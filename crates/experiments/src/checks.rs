@@ -388,6 +388,7 @@ mod tests {
                     n_train: 100,
                     sparse: false,
                     cold_restarts: 0,
+                    model_selection: None,
                 },
                 colour: crate::summary::colour(if ok { 1.0 } else { 0.0 }).into(),
                 final_x: None,

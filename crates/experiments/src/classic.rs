@@ -156,6 +156,7 @@ where
         },
         prior_shift: None,
         dynamics,
+        model_selection: vicpilco_learn::outer::ModelSelection::Likelihood,
         optimiser: OptimiserOptions {
             length: scn.opt_length as u64,
             mfepls: scn.opt_mfepls as u64,

@@ -8,6 +8,7 @@
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use vicpilco_env::arm::ControllerKind;
+use vicpilco_learn::outer::ModelSelection;
 pub use vicpilco_pilco::policy::CentreScale;
 
 /// The shipped configs: (name, file text). `vil-gic` is an alias of `vil-gic-rbf10`.
@@ -210,6 +211,16 @@ pub struct GpConfig {
     /// ramp predictable (EXPERIMENTS.md, "Force inputs for VILTA").
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub force_inputs: bool,
+    /// How each update picks its model's hyper-parameters: `"likelihood"` (the default,
+    /// PILCO's: the refit) or `"last-rollout"` (ours: the refit or the previous update's
+    /// hyper-parameters, whichever predicts the newest roll-out's return better;
+    /// `vicpilco_learn::outer::ModelSelection`).
+    #[serde(default, skip_serializing_if = "is_likelihood")]
+    pub model_selection: ModelSelection,
+}
+
+fn is_likelihood(s: &ModelSelection) -> bool {
+    *s == ModelSelection::Likelihood
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -535,6 +546,9 @@ impl ArmExperiment {
         }
         if self.gp.force_inputs {
             keys.push("gp.force_inputs");
+        }
+        if self.gp.model_selection != ModelSelection::Likelihood {
+            keys.push("gp.model_selection");
         }
         if !self.sensor_noise {
             keys.push("sensor_noise");

@@ -263,6 +263,7 @@ mod tests {
             n_train: 40,
             sparse: false,
             cold_restarts: 0,
+            model_selection: None,
         }
     }
 

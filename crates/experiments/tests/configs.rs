@@ -4,6 +4,7 @@
 use vicpilco_env::arm::ControllerKind;
 use vicpilco_experiments::arm;
 use vicpilco_experiments::config::{self, ArmExperiment, PolicyKind, PriorMean, Task, CONFIGS};
+use vicpilco_learn::outer::ModelSelection;
 
 fn shipped(name: &str) -> ArmExperiment {
     let (file, text) = config::shipped(name).unwrap_or_else(|| panic!("{name} not shipped"));
@@ -42,6 +43,7 @@ fn assert_vil_common(c: &ArmExperiment) {
         (300, 300, 300)
     );
     assert!(c.gp.cold_restart);
+    assert_eq!(c.gp.model_selection, ModelSelection::LastRollout);
     assert_eq!(c.gp.hyper_points, 300);
     assert_eq!(c.policy.k_min, 5.0);
     assert_eq!(c.cost.position_dims, ["x", "y"]);
@@ -277,6 +279,38 @@ fn sensor_noise_is_on_unless_switched_off_and_then_an_ours_key() {
     let err = set("\"no\"").unwrap_err().to_string();
     assert!(
         err.contains("sensor_noise") && err.contains("test.toml"),
+        "{err}"
+    );
+}
+
+#[test]
+fn every_arm_run_selects_its_model_on_the_last_roll_out_and_says_it_is_ours() {
+    for (name, _) in CONFIGS {
+        let c = shipped(name);
+        assert_eq!(c.gp.model_selection, ModelSelection::LastRollout, "{name}");
+        assert!(c.ours_keys().contains(&"gp.model_selection"), "{name}");
+        let (setup, _) = arm::setup(&c, arm::rbf_policy(&c, 1).unwrap(), 1).unwrap();
+        assert_eq!(setup.model_selection, ModelSelection::LastRollout, "{name}");
+    }
+    let text = config::shipped("vil-gic-rbf10").unwrap().1;
+    let set = |value: &str| {
+        config::parse(
+            &text.replace(
+                "model_selection = \"last-rollout\"",
+                &format!("model_selection = {value}"),
+            ),
+            "test.toml",
+        )
+    };
+    let pilco = set("\"likelihood\"").unwrap();
+    assert_eq!(pilco.gp.model_selection, ModelSelection::Likelihood);
+    assert!(!pilco.ours_keys().contains(&"gp.model_selection"));
+    // PILCO's rule is the default and is not written, so runs made before the key resume.
+    let written = serde_json::to_value(&pilco).unwrap();
+    assert!(written["gp"].get("model_selection").is_none(), "{written}");
+    let err = set("\"best-guess\"").unwrap_err().to_string();
+    assert!(
+        err.contains("model_selection") && err.contains("test.toml"),
         "{err}"
     );
 }

@@ -172,6 +172,14 @@ fn vil_gic_quick_run_writes_every_file_and_resumes_bit_for_bit() {
         assert!(e.objective_end <= e.objective_start);
         assert!(["green", "yellow", "red"].contains(&e.colour.as_str()));
         assert!(e.final_x.is_some_and(|x| x > 0.5) && e.max_force.is_some());
+        // The model is chosen on the newest roll-out once a policy has made one.
+        match &e.model_selection {
+            None => assert_eq!(e.index, 1, "{e:?}"),
+            Some(s) => {
+                assert!(e.index >= 2 && s.refit_score.is_finite() && s.previous_score.is_finite());
+                assert_eq!(s.kept_previous, s.previous_score < s.refit_score);
+            }
+        }
     }
     assert_eq!(summary.n_params, 68);
     assert!(summary.initial_return.is_some() && summary.constant_gain_return.is_some());
