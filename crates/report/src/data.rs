@@ -55,6 +55,9 @@ pub(crate) struct Episode {
     /// Points in the dynamics model's training set, and whether it was the sparse (FITC) GP.
     pub n_train: Option<u64>,
     pub sparse: Option<bool>,
+    /// With the model chosen on the newest roll-out: whether the previous update's
+    /// hyper-parameters were kept (`None`: no choice was made or recorded).
+    pub kept_previous_model: Option<bool>,
 }
 
 impl Episode {

@@ -61,6 +61,11 @@ fn episodes(h: &mut String, run: &Run) {
     if gp {
         names.push("GP points");
     }
+    // Runs that choose their model on the newest roll-out say which model each update used.
+    let chosen = eps.iter().any(|e| e.kept_previous_model.is_some());
+    if chosen {
+        names.push("model");
+    }
     // Arm runs: each gain's mean ± std over the roll-out; a std of 0 is a policy output that
     // has died at the middle of its range (EXPERIMENTS.md, "The RBF policy's k_x output dies").
     let gains = arm && run.rollouts.is_some();
@@ -89,6 +94,16 @@ fn episodes(h: &mut String, run: &Run) {
                 (Some(n), _) => n.to_string(),
                 (None, _) => "–".into(),
             });
+        }
+        if chosen {
+            cells.push(
+                match e.kept_previous_model {
+                    Some(true) => "previous",
+                    Some(false) => "refit",
+                    None => "–",
+                }
+                .into(),
+            );
         }
         if gains {
             let rollout = run.rollout_of(e.index);

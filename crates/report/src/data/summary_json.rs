@@ -68,6 +68,9 @@ fn parse_episode(n: Node<'_>) -> Result<Episode, ReportError> {
         max_force: n.opt_f64("max_force")?,
         n_train: n.opt_u64("n_train")?,
         sparse: n.opt_bool("sparse")?,
+        kept_previous_model: n.with("model_selection", |m| {
+            m.map(|m| m.req("kept_previous", |k| k.bool())).transpose()
+        })?,
     })
 }
 

@@ -326,6 +326,15 @@ pub fn write_run(dir: &Path, kind: Kind) {
             "n_train": 100 * u,
             "sparse": u > 4,
         }));
+        // Arm runs choose their model on the newest roll-out from the second update on.
+        if arm && u >= 2 {
+            let kept = u % 2 == 0;
+            episodes.last_mut().unwrap()["model_selection"] = json!({
+                "refit_score": if kept { 3.0 } else { 1.0 },
+                "previous_score": 2.0,
+                "kept_previous": kept,
+            });
+        }
         for tr in &trs {
             rollouts.push(rollout_json(u, tr));
         }
