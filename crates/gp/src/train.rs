@@ -36,7 +36,7 @@ use std::time::{Duration, Instant};
 /// Options of [`train`].
 #[derive(Clone, Debug)]
 pub struct TrainOptions {
-    /// L-BFGS iterations per output (default 100).
+    /// L-BFGS iterations per output (default 100); 0 keeps the given hyper-parameters.
     pub max_iters: u64,
     /// Stop when `‖∇‖₂` of the objective is below this (default 1e-6).
     pub grad_tol: f64,

@@ -45,11 +45,10 @@ pub enum ModelSelection {
     /// the previous ones (and, with a cold restart, from the first guess).
     #[default]
     Likelihood,
-    /// Ours: also keep the previous update's hyper-parameters as a candidate (refitted to the
-    /// new data only where nothing is trained: the sparse GP's inducing inputs), predict the
-    /// policy that produced the newest roll-out from that roll-out's start under both, and use
-    /// the one whose predicted return gives the recorded return the higher density
-    /// ([`rollout_score`]). Why: the likelihood scores one-step predictions only, and on the
+    /// Ours: also build the model on the new data with the previous update's hyper-parameters
+    /// unchanged (a sparse GP still fits its inducing inputs), predict the policy that produced
+    /// the newest roll-out from that roll-out's start under both models, and use the one whose
+    /// predicted return gives the recorded return the higher density ([`rollout_score`]). Why: the likelihood scores one-step predictions only, and on the
     /// arm's contact data a refit can reach hyper-parameters whose long-term prediction of the
     /// very roll-out just added is off by its whole spread (EXPERIMENTS.md).
     LastRollout,

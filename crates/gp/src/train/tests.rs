@@ -151,6 +151,22 @@ fn training_decreases_the_objective_and_warm_start_stops_quickly() {
 }
 
 #[test]
+fn zero_iterations_keep_the_given_hyper_parameters_exactly() {
+    // The learning loop builds its "previous hyper-parameters" candidate this way.
+    let (x, y) = data(60, 2, 9);
+    let targets = Mat::from_fn(60, 1, |i, _| y[i]);
+    let init = vec![start(&x, &y)];
+    let opts = TrainOptions {
+        max_iters: 0,
+        ..Default::default()
+    };
+    let (hyp, rep) = train(x.as_ref(), targets.as_ref(), &init, &opts).unwrap();
+    assert_eq!(hyp, init);
+    assert_eq!(rep.outputs[0].iterations, 0);
+    assert_eq!(rep.outputs[0].objective, rep.outputs[0].initial_objective);
+}
+
+#[test]
 fn training_is_the_same_on_one_thread_and_on_many() {
     let (x, y1) = data(40, 2, 8);
     let y2 = smooth_targets(&x, 1, 8);
