@@ -12,7 +12,9 @@
 //!
 //! `cargo run --release -p vicpilco-experiments --example model_drift -- RUN_DIR FROM TO [final | U | const:KX,KY] [CONFIG]`
 //! Settings come from CONFIG, by default the shipped config of the run's experiment name, so
-//! a training setting can be tried on a run's recorded data.
+//! a training setting can be tried on a run's recorded data. Where the run chose its model on
+//! the newest roll-out (`gp.model_selection = "last-rollout"`) and the settings still ask for
+//! it, each update keeps the previous hyper-parameters or refits as the run recorded.
 
 use anyhow::{Context, Result};
 use vicpilco_experiments::{arm, config, record::Checkpoint};
@@ -20,6 +22,7 @@ use vicpilco_gp::moments::MmModel;
 use vicpilco_gp::train::initial_hyper;
 use vicpilco_gp::DynamicsModel;
 use vicpilco_learn::data::training_set;
+use vicpilco_learn::outer::ModelSelection;
 use vicpilco_learn::step::StepSpec;
 use vicpilco_pilco::policy::{LinearPolicy, Policy};
 
@@ -147,12 +150,26 @@ where
             .clone()
             .unwrap_or_else(|| initial_hyper(x.as_ref(), y.as_ref()));
         let n = x.nrows();
+        // A run that chose its model on the newest roll-out recorded the choice per update;
+        // the replay makes the same one (it cannot re-score: that needs each update's policy).
+        let kept = setup.model_selection == ModelSelection::LastRollout
+            && ck
+                .state
+                .episodes
+                .get(k - 1)
+                .and_then(|e| e.model_selection)
+                .is_some_and(|s| s.kept_previous);
+        let mut opts = setup.dynamics.clone();
+        if kept {
+            opts.train.max_iters = 0;
+            opts.train.cold_restart = false;
+        }
         let (model, _) = DynamicsModel::fit(
             x,
             y,
             &init,
             inducing.as_ref().map(|m: &faer::Mat<f64>| m.as_ref()),
-            &setup.dynamics,
+            &opts,
         )?;
         hyp = Some(model.hyp().to_vec());
         if model.is_sparse() {
