@@ -159,11 +159,11 @@ where
                 .get(k - 1)
                 .and_then(|e| e.model_selection)
                 .is_some_and(|s| s.kept_previous);
-        let mut opts = setup.dynamics.clone();
-        if kept {
-            opts.train.max_iters = 0;
-            opts.train.cold_restart = false;
-        }
+        let opts = if kept {
+            setup.dynamics.keeping_hyper_parameters()
+        } else {
+            setup.dynamics.clone()
+        };
         let (model, _) = DynamicsModel::fit(
             x,
             y,

@@ -227,6 +227,18 @@ impl Default for DynamicsOptions {
     }
 }
 
+impl DynamicsOptions {
+    /// The same options with the given hyper-parameters kept as they are: no training
+    /// iterations and no cold restart (a sparse model still fits its inducing inputs). The
+    /// learning loop's "previous hyper-parameters" candidate and its replays build it this way.
+    pub fn keeping_hyper_parameters(&self) -> Self {
+        let mut kept = self.clone();
+        kept.train.max_iters = 0;
+        kept.train.cold_restart = false;
+        kept
+    }
+}
+
 /// What [`DynamicsModel::fit`] did.
 #[derive(Clone, Debug)]
 pub enum DynamicsReport {

@@ -462,9 +462,7 @@ where
             )?;
             let mut selection = None;
             if let Some((prev_hyp, last)) = previous {
-                let mut keep = self.dynamics.clone();
-                keep.train.max_iters = 0;
-                keep.train.cold_restart = false;
+                let keep = self.dynamics.keeping_hyper_parameters();
                 let (kept, _) = DynamicsModel::fit(
                     inputs,
                     targets,

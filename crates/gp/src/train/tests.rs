@@ -156,10 +156,9 @@ fn zero_iterations_keep_the_given_hyper_parameters_exactly() {
     let (x, y) = data(60, 2, 9);
     let targets = Mat::from_fn(60, 1, |i, _| y[i]);
     let init = vec![start(&x, &y)];
-    let opts = TrainOptions {
-        max_iters: 0,
-        ..Default::default()
-    };
+    let opts = crate::sparse::DynamicsOptions::default()
+        .keeping_hyper_parameters()
+        .train;
     let (hyp, rep) = train(x.as_ref(), targets.as_ref(), &init, &opts).unwrap();
     assert_eq!(hyp, init);
     assert_eq!(rep.outputs[0].iterations, 0);
