@@ -343,6 +343,10 @@ where
         dt: env.dt(),
         state_names: env.state_names(),
         action_names: env.action_names(),
+        action_bounds: setup
+            .squash
+            .as_ref()
+            .map(|sq| sq.ranges().iter().map(|r| r.bounds()).collect()),
         w_mean: setup.ret.w_mean,
         w_energy: setup.ret.energy.as_ref().map_or(0.0, |(_, w)| *w),
     };

@@ -49,6 +49,9 @@ pub struct PredictionLabels {
     pub dt: f64,
     pub state_names: Vec<String>,
     pub action_names: Vec<String>,
+    /// The range each (squashed) action can take, `None` without squashing: the report
+    /// clips the Gaussian summary's band to it, since no applied action lies outside.
+    pub action_bounds: Option<Vec<(f64, f64)>>,
     /// w1 and w3 of the return: the weighted cost per step is `w1 E[c] + w3 E[c_a]`.
     pub w_mean: f64,
     pub w_energy: f64,
@@ -267,6 +270,7 @@ impl Recorder<'_> {
             "dt": l.dt,
             "state_names": l.state_names,
             "action_names": l.action_names,
+            "action_bounds": l.action_bounds,
             "starts": starts,
         }))
     }

@@ -202,7 +202,16 @@ fn vil_gic_quick_run_writes_every_file_and_resumes_bit_for_bit() {
         assert!(full.join(file).is_file(), "{file} missing");
     }
     assert_eq!(read(&full.join("rollouts.jsonl")).lines().count(), 4);
-    assert_eq!(read(&full.join("predictions.jsonl")).lines().count(), 3);
+    let predictions = read(&full.join("predictions.jsonl"));
+    assert_eq!(predictions.lines().count(), 3);
+    for line in predictions.lines() {
+        let v: serde_json::Value = serde_json::from_str(line).unwrap();
+        // The stiffness range of the shipped vil-gic config, which the report's band stops at.
+        assert_eq!(
+            v["action_bounds"],
+            serde_json::json!([[5.0, 250.0], [5.0, 250.0]])
+        );
+    }
     // The untrained policy and the three updates' policies; the last is policy.json's.
     let policies: Vec<serde_json::Value> = read(&full.join("policies.jsonl"))
         .lines()

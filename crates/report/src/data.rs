@@ -235,6 +235,9 @@ pub(crate) struct Prediction {
     pub dt: f64,
     pub state_names: Vec<String>,
     pub action_names: Vec<String>,
+    /// The range of each squashed action (absent in runs without squashing and in files
+    /// written before it was recorded).
+    pub action_bounds: Option<Vec<(f64, f64)>>,
     /// The first start distribution's steps.
     pub steps: Vec<PredStep>,
 }
@@ -494,6 +497,18 @@ fn parse_prediction(n: Node<'_>) -> Result<Prediction, ReportError> {
         dt,
         state_names: names("state_names", ds, "state")?,
         action_names: names("action_names", da, "action")?,
+        action_bounds: n.with("action_bounds", |v| {
+            v.map(|v| {
+                let rows = v.f64_rows()?;
+                if rows.len() != da || rows.iter().any(|r| r.len() != 2 || r[0] > r[1]) {
+                    return Err(
+                        v.malformed(format!("{da} [lowest, highest] pairs (one per action)"))
+                    );
+                }
+                Ok(rows.iter().map(|r| (r[0], r[1])).collect())
+            })
+            .transpose()
+        })?,
         steps,
     })
 }

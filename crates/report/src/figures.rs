@@ -108,9 +108,15 @@ fn policy(
         },
         "policy",
         format!(
-            "Final policy (update {}): predicted action distribution (mean ± 2σ) over time, with \
-             the actions applied in that update's roll-out and in the initial exploration roll-out.",
-            last.episode
+            "Final policy (update {}): predicted action distribution (mean ± 2σ{}) over time, \
+             with the actions applied in that update's roll-out and in the initial exploration \
+             roll-out.",
+            last.episode,
+            if last.action_bounds.is_some() {
+                ", clipped to the saturation range"
+            } else {
+                ""
+            }
         ),
     )
 }

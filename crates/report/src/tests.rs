@@ -258,6 +258,18 @@ fn malformed_fields_are_named() {
     assert!(err.contains("line 3: starts[0][7]"), "{err}");
 
     write_run(tmp.path(), Kind::Vil);
+    edit_lines(&tmp.path().join("predictions.jsonl"), |i, v| {
+        if i == 1 {
+            v["action_bounds"][1] = serde_json::json!([250.0, 5.0]);
+        }
+    });
+    let err = write_report(tmp.path()).unwrap_err().to_string();
+    assert!(
+        err.contains("line 2: action_bounds") && err.contains("[lowest, highest]"),
+        "{err}"
+    );
+
+    write_run(tmp.path(), Kind::Vil);
     edit_json(&summary, |v| {
         v["config"]["geometry"]
             .as_object_mut()

@@ -134,6 +134,14 @@ pub enum SatRange {
 }
 
 impl SatRange {
+    /// The closed interval `(lowest, highest)` the saturated output can take.
+    pub fn bounds(self) -> (f64, f64) {
+        match self {
+            SatRange::Symmetric { a_max } => (-a_max, a_max),
+            SatRange::Bounded { a_min, a_max } => (a_min, a_max),
+        }
+    }
+
     /// `(offset c, half-width h)` of the affine map `u = c + h σ(x)`.
     fn affine(self) -> (f64, f64) {
         match self {

@@ -1,6 +1,8 @@
 //! (b) The final policy's action profiles over time: the predicted action distribution (mean
 //! ± 2σ) of the last policy update against the actions actually applied in that update's
-//! roll-out and in the initial exploration roll-out (thesis Figs 5-6, 5-12, right).
+//! roll-out and in the initial exploration roll-out (thesis Figs 5-6, 5-12, right). The
+//! band is clipped to the action's saturation range when the run recorded it: the moment-matched
+//! Gaussian of a squashed action can reach past a bound that no applied action crosses.
 
 use super::{
     axis_label, chart, draw_prediction, grid_size, legend, panels, pretty, range, stairs, std_of,
@@ -26,6 +28,19 @@ fn recorded(r: &Rollout, j: usize, dt: f64) -> Option<(Vec<f64>, Vec<f64>)> {
     v.filter(|v| !v.is_empty()).map(|v| stairs(0.0, dt, &v))
 }
 
+/// `mean ± half_width`, clipped to `bounds` (lowest, highest) when given.
+fn clipped_band(
+    mean: &[f64],
+    half_width: &[f64],
+    bounds: Option<(f64, f64)>,
+) -> (Vec<f64>, Vec<f64>) {
+    let (lowest, highest) = bounds.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+    mean.iter()
+        .zip(half_width)
+        .map(|(m, h)| ((m - h).max(lowest), (m + h).min(highest)))
+        .unzip()
+}
+
 impl Figure for Policy<'_> {
     fn size(&self) -> (u32, u32) {
         grid_size(self.pred.action_names.len(), 480)
@@ -48,17 +63,9 @@ impl Figure for Policy<'_> {
                 .iter()
                 .map(|s| 2.0 * std_of(s.action_var[j]))
                 .collect();
+            let bounds = p.action_bounds.as_ref().and_then(|b| b.get(j).copied());
             let (ts, m) = stairs(t0, dt, &mean);
-            let lo: Vec<f64> = m
-                .iter()
-                .zip(stairs(t0, dt, &sd).1)
-                .map(|(m, s)| m - s)
-                .collect();
-            let hi: Vec<f64> = m
-                .iter()
-                .zip(stairs(t0, dt, &sd).1)
-                .map(|(m, s)| m + s)
-                .collect();
+            let (lo, hi) = clipped_band(&m, &stairs(t0, dt, &sd).1, bounds);
             let last = self.last.and_then(|r| recorded(r, j, dt));
             let initial = self.initial.and_then(|r| recorded(r, j, dt));
 
@@ -117,5 +124,22 @@ impl Figure for Policy<'_> {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::clipped_band;
+
+    #[test]
+    fn the_band_stops_at_the_saturation_range() {
+        let mean = [6.0, 100.0, 249.0];
+        let half = [4.0, 20.0, 3.0];
+        let (lo, hi) = clipped_band(&mean, &half, Some((5.0, 250.0)));
+        assert_eq!(lo, [5.0, 80.0, 246.0]);
+        assert_eq!(hi, [10.0, 120.0, 250.0]);
+        let (lo, hi) = clipped_band(&mean, &half, None);
+        assert_eq!(lo, [2.0, 80.0, 246.0]);
+        assert_eq!(hi, [10.0, 120.0, 252.0]);
     }
 }

@@ -205,7 +205,13 @@ fn rollout_json(episode: usize, tr: &Traj) -> Value {
 }
 
 /// A prediction close to `tr` with uncertainty growing over the horizon.
-fn prediction_json(episode: usize, tr: &Traj, names: (&[&str], &[&str]), dt: f64) -> Value {
+fn prediction_json(
+    episode: usize,
+    tr: &Traj,
+    names: (&[&str], &[&str]),
+    bounds: &[[f64; 2]],
+    dt: f64,
+) -> Value {
     let steps: Vec<Value> = (0..tr.actions.len())
         .map(|k| {
             let x = &tr.states[k + 1];
@@ -233,6 +239,7 @@ fn prediction_json(episode: usize, tr: &Traj, names: (&[&str], &[&str]), dt: f64
         "dt": dt,
         "state_names": names.0,
         "action_names": names.1,
+        "action_bounds": bounds,
         "starts": [steps],
     })
 }
@@ -263,6 +270,16 @@ pub fn write_run(dir: &Path, kind: Kind) {
         &["k_x", "k_y", "dx_ref", "dy_ref"][..n_actions]
     } else {
         &["torque"]
+    };
+    let action_bounds: &[[f64; 2]] = if arm {
+        &[
+            [5.0, 250.0],
+            [5.0, 250.0],
+            [-0.0025, 0.0025],
+            [-0.0025, 0.0025],
+        ][..n_actions]
+    } else {
+        &[[-2.5, 2.5]]
     };
     let start_y = |update: usize, r: usize| -> f64 {
         if kind == Kind::ViltaVar {
@@ -295,7 +312,13 @@ pub fn write_run(dir: &Path, kind: Kind) {
         let trs: Vec<Traj> = (0..per_update)
             .map(|r| traj(if r == 1 && u > 2 { 0.4 } else { quality }, u, r))
             .collect();
-        predictions.push(prediction_json(u, &trs[0], (state_names, action_names), dt));
+        predictions.push(prediction_json(
+            u,
+            &trs[0],
+            (state_names, action_names),
+            action_bounds,
+            dt,
+        ));
         let ok = trs.iter().filter(|t| t.success).count();
         let colour = match ok {
             0 => "red",
