@@ -22,7 +22,7 @@ use vicpilco_gp::moments::MmModel;
 use vicpilco_gp::train::initial_hyper;
 use vicpilco_gp::DynamicsModel;
 use vicpilco_learn::data::training_set;
-use vicpilco_learn::outer::ModelSelection;
+use vicpilco_learn::selection::ModelSelection;
 use vicpilco_learn::step::StepSpec;
 use vicpilco_pilco::policy::{LinearPolicy, Policy};
 

@@ -156,7 +156,7 @@ where
         },
         prior_shift: None,
         dynamics,
-        model_selection: vicpilco_learn::outer::ModelSelection::Likelihood,
+        model_selection: vicpilco_learn::selection::ModelSelection::Likelihood,
         optimiser: OptimiserOptions {
             length: scn.opt_length as u64,
             mfepls: scn.opt_mfepls as u64,

@@ -8,7 +8,7 @@
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use vicpilco_env::arm::ControllerKind;
-use vicpilco_learn::outer::ModelSelection;
+use vicpilco_learn::selection::ModelSelection;
 pub use vicpilco_pilco::policy::CentreScale;
 
 /// The shipped configs: (name, file text). `vil-gic` is an alias of `vil-gic-rbf10`.
@@ -214,7 +214,7 @@ pub struct GpConfig {
     /// How each update picks its model's hyper-parameters: `"likelihood"` (the default,
     /// PILCO's: the refit) or `"last-rollout"` (ours: the refit or the previous update's
     /// hyper-parameters, whichever predicts the newest roll-out's return better;
-    /// `vicpilco_learn::outer::ModelSelection`).
+    /// `vicpilco_learn::selection::ModelSelection`).
     #[serde(default, skip_serializing_if = "is_likelihood")]
     pub model_selection: ModelSelection,
 }

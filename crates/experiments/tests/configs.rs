@@ -4,7 +4,7 @@
 use vicpilco_env::arm::ControllerKind;
 use vicpilco_experiments::arm;
 use vicpilco_experiments::config::{self, ArmExperiment, PolicyKind, PriorMean, Task, CONFIGS};
-use vicpilco_learn::outer::ModelSelection;
+use vicpilco_learn::selection::ModelSelection;
 
 fn shipped(name: &str) -> ArmExperiment {
     let (file, text) = config::shipped(name).unwrap_or_else(|| panic!("{name} not shipped"));

@@ -6,11 +6,13 @@
 //! * [`value`]: the expected return over a horizon and `dJ/dψ` by one reverse sweep;
 //! * [`data`]: roll-outs and the GP training set built from them;
 //! * [`outer`]: the learning loop over an [`vicpilco_env::Environment`], with checkpoints;
+//! * [`selection`]: which dynamics model an update optimises on (PILCO's refit or ours);
 //! * [`start`]: start distributions of the real episodes.
 
 pub mod data;
 pub mod joint;
 pub mod outer;
+pub mod selection;
 pub mod start;
 pub mod step;
 pub mod value;

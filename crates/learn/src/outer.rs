@@ -6,6 +6,7 @@
 //! from the master seed per (episode, purpose), so an episode can be reproduced alone.
 
 use crate::data::{augment, training_set, Rollout};
+use crate::selection::{ModelSelection, SelectionRecord};
 use crate::start::StartDistribution;
 use crate::step::{Predictor, StepSpec};
 use crate::value::{value, ReturnSpec, ValueOut};
@@ -35,31 +36,6 @@ pub struct OptimiserOptions {
     /// taken at the start of each update (ours; `None`: PILCO's raw parameters). The
     /// objective is the same function; only the optimiser's steps change.
     pub scale_params: Option<CentreScale>,
-}
-
-/// How each update chooses its dynamics model's hyper-parameters.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ModelSelection {
-    /// PILCO: the hyper-parameters the (penalised) marginal likelihood training reaches from
-    /// the previous ones (and, with a cold restart, from the first guess).
-    #[default]
-    Likelihood,
-    /// Ours: also build the model on the new data with the previous update's hyper-parameters
-    /// unchanged (a sparse GP still fits its inducing inputs), predict the policy that produced
-    /// the newest roll-out from that roll-out's start under both models, and use the one whose
-    /// predicted return gives the recorded return the higher density ([`rollout_score`]). Why: the likelihood scores one-step predictions only, and on the
-    /// arm's contact data a refit can reach hyper-parameters whose long-term prediction of the
-    /// very roll-out just added is off by its whole spread (EXPERIMENTS.md).
-    LastRollout,
-}
-
-/// How well a long-term prediction explains a recorded return: the negative log density of
-/// `recorded` under N(`mean`, `std`²) (up to the constant ½ log 2π), with `std` floored at
-/// 1e-3 · max(|recorded|, 1) so that a deterministic prediction is scored by its error.
-pub fn rollout_score(mean: f64, std: f64, recorded: f64) -> f64 {
-    let s = std.max(1e-3 * recorded.abs().max(1.0));
-    s.ln() + 0.5 * ((mean - recorded) / s).powi(2)
 }
 
 /// What the loop does between roll-outs, reported to an observer.
@@ -161,19 +137,11 @@ pub struct EpisodeRecord {
     /// (0 when the restart is off).
     #[serde(default)]
     pub cold_restarts: usize,
-    /// With [`ModelSelection::LastRollout`]: the [`rollout_score`] of the refitted model and of
+    /// With [`ModelSelection::LastRollout`]: the [`crate::selection::rollout_score`] of the refitted model and of
     /// the previous hyper-parameters (lower is better), and whether the previous ones were
     /// kept. `None` when no selection was made (PILCO's rule, or the first update).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model_selection: Option<SelectionRecord>,
-}
-
-/// One update's choice between the refitted and the previous hyper-parameters.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct SelectionRecord {
-    pub refit_score: f64,
-    pub previous_score: f64,
-    pub kept_previous: bool,
 }
 
 /// Everything the loop produced.
@@ -280,7 +248,7 @@ where
         self.predicted_value_from(policy, model, &self.prediction_starts, with_grad)
     }
 
-    fn predicted_value_from(
+    pub(crate) fn predicted_value_from(
         &self,
         policy: &P,
         model: MmModel<'_>,
@@ -295,33 +263,6 @@ where
             self.prior_shift.as_deref(),
         )?;
         value(&pred, &self.ret, starts, with_grad)
-    }
-
-    /// [`rollout_score`] of `model`'s prediction of `policy` from `r`'s start (the first
-    /// prediction start's covariance around `r`'s true start state) against `r`'s return.
-    fn score_on_rollout(
-        &self,
-        policy: &P,
-        model: &DynamicsModel,
-        r: &Rollout,
-    ) -> Result<f64, LearnError> {
-        let cov = self
-            .prediction_starts
-            .first()
-            .map(|(_, c)| c.clone())
-            .ok_or_else(|| LearnError::Spec("no prediction start distribution".into()))?;
-        let start = r
-            .true_states
-            .first()
-            .ok_or_else(|| LearnError::Spec("an empty roll-out".into()))?;
-        let out = self.predicted_value_from(
-            policy,
-            MmModel::dynamics(model),
-            &[(start.clone(), cov)],
-            false,
-        )?;
-        let (mean, std) = self.ret.predicted_return(&out);
-        Ok(rollout_score(mean, std, self.recorded_return(r)))
     }
 
     /// The deterministic action of `policy` at a known observation.
@@ -448,48 +389,21 @@ where
                 .clone()
                 .unwrap_or_else(|| initial_hyper(inputs.as_ref(), targets.as_ref()));
             let n_train = inputs.nrows();
-            // The newest roll-out came from the current policy from the second update on.
-            let previous = match (self.model_selection, &hyp, data.last()) {
-                (ModelSelection::LastRollout, Some(h), Some(r)) if ep >= 2 => Some((h.clone(), r)),
-                _ => None,
-            };
-            let (mut model, report) = DynamicsModel::fit(
+            let (refit, report) = DynamicsModel::fit(
                 inputs.clone(),
                 targets.clone(),
                 &init,
                 inducing.as_ref().map(|m| m.as_ref()),
                 &self.dynamics,
             )?;
-            let mut selection = None;
-            if let Some((prev_hyp, last)) = previous {
-                let keep = self.dynamics.keeping_hyper_parameters();
-                let (kept, _) = DynamicsModel::fit(
-                    inputs,
-                    targets,
-                    &prev_hyp,
-                    inducing.as_ref().map(|m| m.as_ref()),
-                    &keep,
-                )?;
-                let refit_score = self.score_on_rollout(&self.policy, &model, last)?;
-                let previous_score = self.score_on_rollout(&self.policy, &kept, last)?;
-                // Ties keep the refit: PILCO's model unless the previous one is better.
-                let kept_previous = previous_score < refit_score;
-                if kept_previous {
-                    model = kept;
-                }
-                tracing::debug!(
-                    ep,
-                    refit_score,
-                    previous_score,
-                    kept_previous,
-                    "model selection"
-                );
-                selection = Some(SelectionRecord {
-                    refit_score,
-                    previous_score,
-                    kept_previous,
-                });
-            }
+            let (model, selection) = self.select_model(
+                ep,
+                refit,
+                hyp.as_deref(),
+                data.last(),
+                (inputs, targets),
+                inducing.as_ref(),
+            )?;
             hyp = Some(model.hyp().to_vec());
             if model.is_sparse() {
                 inducing = Some(model.inputs().to_owned());
@@ -652,40 +566,5 @@ fn termination_text(t: &Termination) -> String {
         Termination::RelativeChange => "relative change".into(),
         Termination::MaxIterations => "line-search budget (Length)".into(),
         Termination::LineSearchFailed(m) => format!("line search failed: {m}"),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::rollout_score;
-
-    #[test]
-    fn rollout_score_prefers_the_prediction_that_gives_the_recorded_return_more_density() {
-        // The arm's update 6 on seed 3: a refit spread over the whole range against the
-        // previous hyper-parameters' narrow and right prediction (EXPERIMENTS.md).
-        let recorded = 60.09;
-        let refit = rollout_score(76.67, 25.24, recorded);
-        let kept = rollout_score(59.87, 4.14, recorded);
-        assert!(kept < refit, "{kept} vs {refit}");
-        // A confident prediction that is wrong loses to a vague one that covers the outcome.
-        assert!(rollout_score(70.0, 2.0, recorded) > rollout_score(70.0, 20.0, recorded));
-        // The score is the Gaussian negative log density up to ½ log 2π.
-        let (m, s, r) = (1.5f64, 0.5f64, 2.0f64);
-        let density =
-            (-0.5 * ((r - m) / s).powi(2)).exp() / (s * (2.0 * std::f64::consts::PI).sqrt());
-        assert!(
-            (rollout_score(m, s, r) - (-(density.ln()) - 0.5 * (2.0 * std::f64::consts::PI).ln()))
-                .abs()
-                < 1e-12
-        );
-    }
-
-    #[test]
-    fn a_deterministic_prediction_is_scored_by_its_error_not_by_a_zero_spread() {
-        let exact = rollout_score(60.0, 0.0, 60.0);
-        let off = rollout_score(60.5, 0.0, 60.0);
-        assert!(exact.is_finite() && off.is_finite() && exact < off);
-        // Floored at 1e-3 of the recorded return: 0.06 here.
-        assert!((exact - 0.06f64.ln()).abs() < 1e-12);
     }
 }
