@@ -1,0 +1,77 @@
+//! The runs stored in `results/` (see results/README.md): each folder's summary must parse, be
+//! named after its experiment and seed, and appear in the acceptance table over all of them,
+//! so that `vicpilco acceptance results/*/` reproduces what EXPERIMENTS.md quotes.
+
+use std::path::{Path, PathBuf};
+use vicpilco_report::acceptance_markdown;
+
+fn results_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../results")
+}
+
+fn stored_runs() -> Vec<PathBuf> {
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(results_dir())
+        .expect("results/ exists beside the crates")
+        .map(|e| e.expect("readable results/ entry").path())
+        .filter(|p| p.is_dir())
+        .collect();
+    dirs.sort();
+    dirs
+}
+
+#[test]
+fn every_stored_run_is_named_after_its_experiment_and_seed_and_is_complete() {
+    let dirs = stored_runs();
+    for dir in &dirs {
+        let text = std::fs::read_to_string(dir.join("summary.json"))
+            .unwrap_or_else(|e| panic!("{}: {e}", dir.join("summary.json").display()));
+        let summary: serde_json::Value = serde_json::from_str(&text)
+            .unwrap_or_else(|e| panic!("{}: {e}", dir.join("summary.json").display()));
+        let experiment = summary["experiment"].as_str().expect("experiment");
+        let seed = summary["seed"].as_u64().expect("seed");
+        let name = dir.file_name().unwrap().to_string_lossy();
+        assert_eq!(
+            name,
+            format!("{experiment}-seed{seed}"),
+            "{}",
+            dir.display()
+        );
+        // The archive is what lets a later session redraw or resume the run.
+        let archive = dir.join("run.tar.xz");
+        let bytes =
+            std::fs::read(&archive).unwrap_or_else(|e| panic!("{}: {e}", archive.display()));
+        assert!(
+            bytes.starts_with(&[0xfd, b'7', b'z', b'X', b'Z', 0x00]),
+            "{} is not an xz file",
+            archive.display()
+        );
+        assert!(
+            dir.join("report.md").is_file(),
+            "{} lacks report.md",
+            dir.display()
+        );
+    }
+}
+
+#[test]
+fn the_acceptance_table_covers_every_stored_run() {
+    let dirs = stored_runs();
+    assert!(!dirs.is_empty(), "results/ holds no stored run");
+    let table = acceptance_markdown(&dirs).expect("acceptance table over results/");
+    for dir in &dirs {
+        let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+        let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let seed = summary["seed"].as_u64().unwrap();
+        let experiment = summary["experiment"].as_str().unwrap();
+        let heading = format!("## {experiment}\n");
+        let start = table
+            .find(&heading)
+            .unwrap_or_else(|| panic!("no section for {experiment}"));
+        let section = &table[start + heading.len()..];
+        let section = &section[..section.find("\n## ").unwrap_or(section.len())];
+        assert!(
+            section.contains(&format!("- seed {seed}: `")),
+            "seed {seed} missing from the {experiment} section"
+        );
+    }
+}
