@@ -22,7 +22,6 @@ use vicpilco_gp::moments::MmModel;
 use vicpilco_gp::train::initial_hyper;
 use vicpilco_gp::DynamicsModel;
 use vicpilco_learn::data::training_set;
-use vicpilco_learn::selection::ModelSelection;
 use vicpilco_learn::step::StepSpec;
 use vicpilco_pilco::policy::{LinearPolicy, Policy};
 
@@ -152,7 +151,7 @@ where
         let n = x.nrows();
         // A run that chose its model on the newest roll-out recorded the choice per update;
         // the replay makes the same one (it cannot re-score: that needs each update's policy).
-        let kept = setup.model_selection == ModelSelection::LastRollout
+        let kept = setup.model_selection.compares()
             && ck
                 .state
                 .episodes

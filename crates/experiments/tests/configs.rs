@@ -308,6 +308,10 @@ fn every_arm_run_selects_its_model_on_the_last_roll_out_and_says_it_is_ours() {
     // PILCO's rule is the default and is not written, so runs made before the key resume.
     let written = serde_json::to_value(&pilco).unwrap();
     assert!(written["gp"].get("model_selection").is_none(), "{written}");
+    // The experimental rule on the predicted states (off in every shipped config) is ours too.
+    let states = set("\"last-rollout-states\"").unwrap();
+    assert_eq!(states.gp.model_selection, ModelSelection::LastRolloutStates);
+    assert!(states.ours_keys().contains(&"gp.model_selection"));
     let err = set("\"best-guess\"").unwrap_err().to_string();
     assert!(
         err.contains("model_selection") && err.contains("test.toml"),

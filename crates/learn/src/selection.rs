@@ -3,6 +3,7 @@
 
 use crate::data::Rollout;
 use crate::outer::LoopSetup;
+use crate::value::PredictedStep;
 use crate::LearnError;
 use faer::Mat;
 use vicpilco_gp::moments::MmModel;
@@ -21,9 +22,24 @@ pub enum ModelSelection {
     /// unchanged (a sparse GP still fits its inducing inputs), predict the policy that produced
     /// the newest roll-out from that roll-out's start under both models, and use the one whose
     /// predicted return gives the recorded return the higher density ([`rollout_score`]).
-    /// Why: the likelihood scores one-step predictions only, and on the arm's contact data a refit can reach hyper-parameters whose long-term prediction of the
-    /// very roll-out just added is off by its whole spread (EXPERIMENTS.md).
+    /// Why: the likelihood scores one-step predictions only, and on the arm's contact data a
+    /// refit can reach hyper-parameters whose long-term prediction of the very roll-out just
+    /// added is off by its whole spread (EXPERIMENTS.md).
     LastRollout,
+    /// Ours, experimental (no shipped config uses it): as [`Self::LastRollout`], but each
+    /// model is scored on the whole predicted state trajectory of the newest roll-out
+    /// ([`trajectory_score`]) instead of its return. Why: one recorded return is one number,
+    /// and a model that predicts every policy's return as wide as the range of outcomes
+    /// scores well on it whatever happened; the states of 100 steps are not covered that
+    /// cheaply (EXPERIMENTS.md, vil-sic).
+    LastRolloutStates,
+}
+
+impl ModelSelection {
+    /// Does this rule compare the refit with the previous hyper-parameters?
+    pub fn compares(self) -> bool {
+        !matches!(self, ModelSelection::Likelihood)
+    }
 }
 
 /// How well a long-term prediction explains a recorded return: the negative log density of
@@ -32,6 +48,27 @@ pub enum ModelSelection {
 pub fn rollout_score(mean: f64, std: f64, recorded: f64) -> f64 {
     let s = std.max(1e-3 * recorded.abs().max(1.0));
     s.ln() + 0.5 * ((mean - recorded) / s).powi(2)
+}
+
+/// How well a long-term prediction explains a recorded trajectory: the sum over steps and
+/// state entries of the negative log density of the recorded entry under the predicted
+/// marginal N(mean, var) (up to ½ log 2π per term), step `t` of `predicted` against
+/// `recorded[t + 1]` (`recorded[0]` is the start), over the steps both have. Standard
+/// deviations are floored at 1e-9 · max(|recorded|, 1) only to keep a zero variance finite.
+pub fn trajectory_score(predicted: &[PredictedStep], recorded: &[Vec<f64>]) -> f64 {
+    predicted
+        .iter()
+        .zip(recorded.iter().skip(1))
+        .map(|(p, x)| {
+            x.iter()
+                .enumerate()
+                .map(|(d, &v)| {
+                    let s = p.cov[(d, d)].max(0.0).sqrt().max(1e-9 * v.abs().max(1.0));
+                    s.ln() + 0.5 * ((p.mean[d] - v) / s).powi(2)
+                })
+                .sum::<f64>()
+        })
+        .sum()
 }
 
 /// One update's choice between the refitted and the previous hyper-parameters.
@@ -46,10 +83,9 @@ impl<P: Policy + Clone + Sync> LoopSetup<P>
 where
     P::Cache: Send,
 {
-    /// The model update `ep` optimises its policy on: `refit` (PILCO's), or with
-    /// [`ModelSelection::LastRollout`] from the second update on, the training set under
-    /// `previous_hyp` unchanged when that predicts `newest` (the roll-out of the current
-    /// policy) better. Also what was chosen, when a choice was made.
+    /// The model update `ep` optimises its policy on: `refit` (PILCO's), or with a comparing
+    /// [`ModelSelection`] from the second update on, the training set under `previous_hyp`
+    /// unchanged when that predicts `newest` (the roll-out of the current policy) better. Also what was chosen, when a choice was made.
     pub(crate) fn select_model(
         &self,
         ep: usize,
@@ -60,7 +96,7 @@ where
         inducing: Option<&Mat<f64>>,
     ) -> Result<(DynamicsModel, Option<SelectionRecord>), LearnError> {
         let (prev_hyp, last) = match (self.model_selection, previous_hyp, newest) {
-            (ModelSelection::LastRollout, Some(h), Some(r)) if ep >= 2 => (h, r),
+            (rule, Some(h), Some(r)) if rule.compares() && ep >= 2 => (h, r),
             _ => return Ok((refit, None)),
         };
         let (kept, _) = DynamicsModel::fit(
@@ -89,8 +125,10 @@ where
         Ok((if kept_previous { kept } else { refit }, Some(record)))
     }
 
-    /// [`rollout_score`] of `model`'s prediction of `policy` from `r`'s start (the first
-    /// prediction start's covariance around `r`'s true start state) against `r`'s return.
+    /// The selection rule's score (lower is better) of `model`'s prediction of `policy` from
+    /// `r`'s start (the first prediction start's covariance around `r`'s true start state):
+    /// [`trajectory_score`] against `r`'s true states with
+    /// [`ModelSelection::LastRolloutStates`], else [`rollout_score`] against `r`'s return.
     fn score_on_rollout(
         &self,
         policy: &P,
@@ -112,6 +150,19 @@ where
             &[(start.clone(), cov)],
             false,
         )?;
+        if self.model_selection == ModelSelection::LastRolloutStates {
+            let predicted = out
+                .trajectories
+                .first()
+                .ok_or_else(|| LearnError::Spec("a prediction without a trajectory".into()))?;
+            let d = self.spec.state_dim;
+            let recorded: Vec<Vec<f64>> = r
+                .true_states
+                .iter()
+                .map(|x| x.iter().take(d).copied().collect())
+                .collect();
+            return Ok(trajectory_score(predicted, &recorded));
+        }
         let (mean, std) = self.ret.predicted_return(&out);
         Ok(rollout_score(mean, std, self.recorded_return(r)))
     }
@@ -119,7 +170,69 @@ where
 
 #[cfg(test)]
 mod tests {
-    use super::rollout_score;
+    use super::{rollout_score, trajectory_score};
+    use crate::value::PredictedStep;
+    use faer::Mat;
+
+    /// A predicted step with the given state means and standard deviations.
+    fn step(mean: &[f64], std: &[f64]) -> PredictedStep {
+        PredictedStep {
+            mean: mean.to_vec(),
+            cov: Mat::from_fn(mean.len(), mean.len(), |i, j| {
+                if i == j {
+                    std[i] * std[i]
+                } else {
+                    0.0
+                }
+            }),
+            action_mean: vec![],
+            action_cov: Mat::zeros(0, 0),
+            cost_mean: 0.0,
+            cost_var: 0.0,
+            energy_mean: 0.0,
+            immediate: 0.0,
+        }
+    }
+
+    #[test]
+    fn trajectory_score_is_the_summed_gaussian_negative_log_density_of_the_later_states() {
+        let recorded = vec![vec![9.0, 9.0], vec![0.5, 1.0], vec![0.7, 1.2]];
+        let predicted = vec![
+            step(&[0.4, 1.0], &[0.1, 0.2]),
+            step(&[0.7, 1.0], &[0.3, 0.1]),
+        ];
+        let term = |m: f64, s: f64, x: f64| s.ln() + 0.5 * ((m - x) / s).powi(2);
+        let expected =
+            term(0.4, 0.1, 0.5) + term(1.0, 0.2, 1.0) + term(0.7, 0.3, 0.7) + term(1.0, 0.1, 1.2);
+        // The start state (9, 9) is not predicted and not scored.
+        assert!((trajectory_score(&predicted, &recorded) - expected).abs() < 1e-12);
+        // A roll-out that ended early is scored over the steps it has.
+        assert!(
+            (trajectory_score(&predicted, &recorded[..2])
+                - term(0.4, 0.1, 0.5)
+                - term(1.0, 0.2, 1.0))
+            .abs()
+                < 1e-12
+        );
+    }
+
+    #[test]
+    fn trajectory_score_ranks_sharp_and_right_over_vague_over_sharp_and_wrong() {
+        // 100 steps of one entry moving from 0 to 1.
+        let recorded: Vec<Vec<f64>> = (0..=100).map(|t| vec![t as f64 / 100.0]).collect();
+        let predict = |offset: f64, std: f64| -> Vec<PredictedStep> {
+            (1..=100)
+                .map(|t| step(&[t as f64 / 100.0 + offset], &[std]))
+                .collect()
+        };
+        let sharp_right = trajectory_score(&predict(0.001, 0.01), &recorded);
+        let vague = trajectory_score(&predict(0.0, 1.0), &recorded);
+        let sharp_wrong = trajectory_score(&predict(0.2, 0.01), &recorded);
+        assert!(sharp_right < vague && vague < sharp_wrong);
+        // A zero variance stays finite and is scored by its error.
+        let exact = trajectory_score(&predict(0.0, 0.0), &recorded);
+        assert!(exact.is_finite() && exact < sharp_right);
+    }
 
     #[test]
     fn rollout_score_prefers_the_prediction_that_gives_the_recorded_return_more_density() {
