@@ -1,27 +1,48 @@
-//! The runs stored in `results/` (see results/README.md): each folder's summary must parse, be
-//! named after its experiment and seed, and appear in the acceptance table over all of them,
-//! so that `vicpilco acceptance results/*/` reproduces what EXPERIMENTS.md quotes.
+//! The runs stored in `results/` (see results/README.md), and those of each probe in
+//! `probes/<probe>/` (runs with a changed setting, same layout): each folder's summary must
+//! parse, be named after its experiment and seed, and appear in the acceptance table over its
+//! group, so that `vicpilco acceptance results/*/` reproduces what EXPERIMENTS.md quotes.
 
 use std::path::{Path, PathBuf};
 use vicpilco_report::acceptance_markdown;
 
-fn results_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../results")
+fn repo_dir(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(name)
 }
 
-fn stored_runs() -> Vec<PathBuf> {
-    let mut dirs: Vec<PathBuf> = std::fs::read_dir(results_dir())
-        .expect("results/ exists beside the crates")
-        .map(|e| e.expect("readable results/ entry").path())
-        .filter(|p| p.is_dir())
-        .collect();
+/// The sub-folders of `dir`, sorted; none when `dir` does not exist.
+fn folders(dir: &Path) -> Vec<PathBuf> {
+    let mut dirs: Vec<PathBuf> = match std::fs::read_dir(dir) {
+        Ok(entries) => entries
+            .map(|e| e.expect("readable directory entry").path())
+            .filter(|p| p.is_dir())
+            .collect(),
+        Err(_) => Vec::new(),
+    };
     dirs.sort();
     dirs
 }
 
+fn stored_runs() -> Vec<PathBuf> {
+    folders(&repo_dir("results"))
+}
+
+/// Each probe's runs, as its own group (a probe may repeat a seed of results/).
+fn probe_groups() -> Vec<Vec<PathBuf>> {
+    folders(&repo_dir("probes"))
+        .iter()
+        .map(|probe| folders(probe))
+        .collect()
+}
+
 #[test]
 fn every_stored_run_is_named_after_its_experiment_and_seed_and_is_complete() {
-    let dirs = stored_runs();
+    let dirs: Vec<PathBuf> = stored_runs()
+        .into_iter()
+        .chain(probe_groups().into_iter().flatten())
+        .collect();
     for dir in &dirs {
         let text = std::fs::read_to_string(dir.join("summary.json"))
             .unwrap_or_else(|e| panic!("{}: {e}", dir.join("summary.json").display()));
@@ -55,10 +76,16 @@ fn every_stored_run_is_named_after_its_experiment_and_seed_and_is_complete() {
 
 #[test]
 fn the_acceptance_table_covers_every_stored_run() {
-    let dirs = stored_runs();
-    assert!(!dirs.is_empty(), "results/ holds no stored run");
-    let table = acceptance_markdown(&dirs).expect("acceptance table over results/");
-    for dir in &dirs {
+    let results = stored_runs();
+    assert!(!results.is_empty(), "results/ holds no stored run");
+    for dirs in std::iter::once(results).chain(probe_groups()) {
+        covers_every_run(&dirs);
+    }
+}
+
+fn covers_every_run(dirs: &[PathBuf]) {
+    let table = acceptance_markdown(dirs).expect("acceptance table over a group of stored runs");
+    for dir in dirs {
         let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
         let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
         let seed = summary["seed"].as_u64().unwrap();
