@@ -85,7 +85,8 @@ where
 {
     /// The model update `ep` optimises its policy on: `refit` (PILCO's), or with a comparing
     /// [`ModelSelection`] from the second update on, the training set under `previous_hyp`
-    /// unchanged when that predicts `newest` (the roll-out of the current policy) better. Also what was chosen, when a choice was made.
+    /// unchanged when that predicts `newest` (the roll-out of the current policy) better.
+    /// Also what was chosen, when a choice was made.
     pub(crate) fn select_model(
         &self,
         ep: usize,
