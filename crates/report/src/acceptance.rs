@@ -3,7 +3,8 @@
 //!
 //! Only summary.json is read. Claims are matched across runs by their `id` (their text for
 //! summaries written before ids existed). The one claim a run cannot decide alone, vil-sic's
-//! "mean k_y above the GIC run's", is decided here against a vil-gic run of the same seed.
+//! "mean k_y above the GIC run's", is decided here against a vil-gic run of the same seed, or,
+//! when none is given, against every complete vil-gic run.
 
 use crate::data::{Claim, SeedRule, Summary};
 use crate::markdown::{cell, header, row};
@@ -213,14 +214,57 @@ fn paired_gic_k_y(
                 (format!("{text}; {}", unfinished.join(", ")), None)
             }
         }
-        None => (
-            format!(
-                "{:.0} N/m; no vil-gic run of seed {} given",
-                sic_gains[1], sic.seed
-            ),
-            None,
-        ),
+        None => against_other_seeds(sic, sic_gains[1], &gic_names, all),
     }
+}
+
+/// Without a GIC run of the SIC run's seed, the SIC run must be above every complete GIC run
+/// given (the strictest reading of "the GIC run's" when the seeds do not pair) to pass, and
+/// fails only when it is below all of them; in between, or with none complete, it is open.
+fn against_other_seeds(
+    sic: &Summary,
+    sic_k_y: f64,
+    gic_names: &[&String],
+    all: &BTreeMap<String, Vec<RunSummary>>,
+) -> (String, Option<bool>) {
+    let no_pair = format!("no vil-gic run of seed {}", sic.seed);
+    let others: Vec<(&String, u64, f64)> = gic_names
+        .iter()
+        .flat_map(|name| {
+            all[*name]
+                .iter()
+                .filter(|r| complete(&r.summary))
+                .filter_map(move |r| {
+                    r.summary
+                        .final_mean_gains
+                        .map(|g| (*name, r.summary.seed, g[1]))
+                })
+        })
+        .collect();
+    if others.is_empty() {
+        return (format!("{sic_k_y:.0} N/m; {no_pair} given"), None);
+    }
+    let by_k_y = |a: &&(&String, u64, f64), b: &&(&String, u64, f64)| a.2.total_cmp(&b.2);
+    let highest = others.iter().max_by(by_k_y).expect("not empty");
+    let lowest = others.iter().min_by(by_k_y).expect("not empty");
+    let pass = if sic_k_y > highest.2 {
+        Some(true)
+    } else if sic_k_y <= lowest.2 {
+        Some(false)
+    } else {
+        None
+    };
+    let text = format!(
+        "{sic_k_y:.0} N/m; {no_pair}, the {} complete ones: {:.0} ({} seed {}) to {:.0} ({} seed {})",
+        others.len(),
+        lowest.2,
+        lowest.0,
+        lowest.1,
+        highest.2,
+        highest.0,
+        highest.1
+    );
+    (text, pass)
 }
 
 /// Whether a VIL run has all its planned updates: its "final return below the initial" claim,
@@ -403,7 +447,7 @@ mod tests {
                 "3 of 5 seeds",
                 "270 vs 200 N/m (vil-gic-rbf10 seed 1) (pass)",
                 "120 vs 130 N/m (vil-gic-rbf25 seed 2) (fail)",
-                "240 N/m; no vil-gic run of seed 3 given (undecided)",
+                "240 N/m; no vil-gic run of seed 3, the 3 complete ones: 130 (vil-gic-rbf25 seed 2) to 300 (vil-gic-rbf25 seed 1) (undecided)",
                 "240 vs 100 N/m (vil-gic-rbf10 seed 4); GIC run stopped at update 0 (undecided)",
                 "1 of 4",
                 "undecided"
@@ -421,6 +465,37 @@ mod tests {
         assert_eq!(
             gic[2..],
             ["x (pass)", "x (undecided)", "1 of 2", "undecided"]
+        );
+    }
+
+    #[test]
+    fn without_its_seeds_gic_run_sic_must_beat_every_complete_one() {
+        let tmp = TempDir::new("acceptance-unpaired");
+        let root = tmp.path();
+        let gic = |name: &str, seed: u64, k_y: f64, done: bool| {
+            write_summary(root, name, "vil-gic-rbf10", seed, k_y, vec![finished(done)])
+        };
+        let dirs = vec![
+            write_summary(root, "sic1", "vil-sic", 1, 185.0, sic_claims(60.0)),
+            write_summary(root, "sic2", "vil-sic", 2, 50.0, sic_claims(60.0)),
+            write_summary(root, "sic3", "vil-sic", 3, 5.0, sic_claims(60.0)),
+            gic("gic4", 4, 132.5, true),
+            gic("gic5", 5, 7.1, true),
+            // A stopped run's gains are not its final ones: not a comparison.
+            gic("gic6", 6, 400.0, false),
+        ];
+        let md = acceptance_markdown(&dirs).unwrap();
+        let cells = row_of(&md, "mean k_y above GIC's");
+        let range = "the 2 complete ones: 7 (vil-gic-rbf10 seed 5) to 132 (vil-gic-rbf10 seed 4)";
+        assert_eq!(
+            cells[2..],
+            [
+                format!("185 N/m; no vil-gic run of seed 1, {range} (pass)"),
+                format!("50 N/m; no vil-gic run of seed 2, {range} (undecided)"),
+                format!("5 N/m; no vil-gic run of seed 3, {range} (fail)"),
+                "1 of 3".to_string(),
+                "undecided".to_string(),
+            ]
         );
     }
 
