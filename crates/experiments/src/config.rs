@@ -214,7 +214,7 @@ pub struct GpConfig {
     /// How each update picks its model's hyper-parameters: `"likelihood"` (the default,
     /// PILCO's: the refit), `"last-rollout"` (ours: the refit or the previous update's
     /// hyper-parameters, whichever predicts the newest roll-out's return better) or
-    /// `"last-rollout-states"` (ours, experimental: the same choice on the roll-out's predicted
+    /// `"last-rollout-states"` (ours, vil-sic's: the same choice on the roll-out's predicted
     /// states; `vicpilco_learn::selection::ModelSelection`).
     #[serde(default, skip_serializing_if = "is_likelihood")]
     pub model_selection: ModelSelection,

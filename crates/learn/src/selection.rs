@@ -26,7 +26,8 @@ pub enum ModelSelection {
     /// refit can reach hyper-parameters whose long-term prediction of the very roll-out just
     /// added is off by its whole spread (EXPERIMENTS.md).
     LastRollout,
-    /// Ours, experimental (no shipped config uses it): as [`Self::LastRollout`], but each
+    /// Ours, vil-sic's rule (the GIC and VILTA configs keep [`Self::LastRollout`], with
+    /// which their acceptance runs were made): as [`Self::LastRollout`], but each
     /// model is scored on the whole predicted state trajectory of the newest roll-out
     /// ([`trajectory_score`]) instead of its return. Why: one recorded return is one number,
     /// and a model that predicts every policy's return as wide as the range of outcomes
