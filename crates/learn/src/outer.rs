@@ -138,7 +138,8 @@ pub struct EpisodeRecord {
     #[serde(default)]
     pub cold_restarts: usize,
     /// With a comparing [`ModelSelection`]: the rule's score of the refitted model and of the
-    /// previous hyper-parameters (lower is better), and whether the previous ones were kept. `None` when no selection was made (PILCO's rule, or the first update).
+    /// previous hyper-parameters (lower is better), and whether the previous ones were kept.
+    /// `None` when no selection was made (PILCO's rule, or the first update).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model_selection: Option<SelectionRecord>,
 }

@@ -184,14 +184,8 @@ fn paired_gic_k_y(
     let preferred = ["vil-gic-rbf10", "vil-gic"];
     let mut gic_names: Vec<&String> = all.keys().filter(|k| k.starts_with("vil-gic")).collect();
     gic_names.sort_by_key(|k| (!preferred.contains(&k.as_str()), k.as_str()));
-    let candidates: Vec<(&String, &Summary, [f64; 2])> = gic_names
-        .iter()
-        .flat_map(|name| {
-            all[*name]
-                .iter()
-                .filter(|r| r.summary.seed == sic.seed)
-                .filter_map(move |r| r.summary.final_mean_gains.map(|g| (*name, &r.summary, g)))
-        })
+    let candidates: Vec<(&String, &Summary, [f64; 2])> = gic_runs(&gic_names, all)
+        .filter(|(_, s, _)| s.seed == sic.seed)
         .collect();
     let paired = candidates
         .iter()
@@ -218,6 +212,18 @@ fn paired_gic_k_y(
     }
 }
 
+/// The GIC runs of `gic_names` (in that order) that recorded their final gains.
+fn gic_runs<'a>(
+    gic_names: &'a [&'a String],
+    all: &'a BTreeMap<String, Vec<RunSummary>>,
+) -> impl Iterator<Item = (&'a String, &'a Summary, [f64; 2])> + 'a {
+    gic_names.iter().flat_map(move |name| {
+        all[*name]
+            .iter()
+            .filter_map(move |r| r.summary.final_mean_gains.map(|g| (*name, &r.summary, g)))
+    })
+}
+
 /// Without a GIC run of the SIC run's seed, the SIC run must be above every complete GIC run
 /// given (the strictest reading of "the GIC run's" when the seeds do not pair) to pass, and
 /// fails only when it is below all of them; in between, or with none complete, it is open.
@@ -228,18 +234,9 @@ fn against_other_seeds(
     all: &BTreeMap<String, Vec<RunSummary>>,
 ) -> (String, Option<bool>) {
     let no_pair = format!("no vil-gic run of seed {}", sic.seed);
-    let others: Vec<(&String, u64, f64)> = gic_names
-        .iter()
-        .flat_map(|name| {
-            all[*name]
-                .iter()
-                .filter(|r| complete(&r.summary))
-                .filter_map(move |r| {
-                    r.summary
-                        .final_mean_gains
-                        .map(|g| (*name, r.summary.seed, g[1]))
-                })
-        })
+    let others: Vec<(&String, u64, f64)> = gic_runs(gic_names, all)
+        .filter(|(_, s, _)| complete(s))
+        .map(|(name, s, g)| (name, s.seed, g[1]))
         .collect();
     if others.is_empty() {
         return (format!("{sic_k_y:.0} N/m; {no_pair} given"), None);
