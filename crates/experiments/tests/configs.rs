@@ -318,6 +318,16 @@ fn every_arm_run_selects_its_model_on_the_last_roll_out_and_says_it_is_ours() {
     let states = set("\"last-rollout-states\"").unwrap();
     assert_eq!(states.gp.model_selection, ModelSelection::LastRolloutStates);
     assert!(states.ours_keys().contains(&"gp.model_selection"));
+    let robust = set("\"last-rollout-states-robust\"").unwrap();
+    assert_eq!(
+        robust.gp.model_selection,
+        ModelSelection::LastRolloutStatesRobust
+    );
+    let (setup, _) = arm::setup(&robust, arm::rbf_policy(&robust, 1).unwrap(), 1).unwrap();
+    assert_eq!(
+        setup.model_selection,
+        ModelSelection::LastRolloutStatesRobust
+    );
     let err = set("\"best-guess\"").unwrap_err().to_string();
     assert!(
         err.contains("model_selection") && err.contains("test.toml"),
