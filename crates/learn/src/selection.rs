@@ -267,15 +267,21 @@ mod tests {
         );
     }
 
+    /// 100 steps of one entry moving from 0 to 1, after the start at 0.
+    fn ramp() -> Vec<Vec<f64>> {
+        (0..=100).map(|t| vec![t as f64 / 100.0]).collect()
+    }
+
+    /// A prediction of [`ramp`] off by `offset` at every step, with spread `std`.
+    fn predict_ramp(offset: f64, std: f64) -> Vec<PredictedStep> {
+        (1..=100)
+            .map(|t| step(&[t as f64 / 100.0 + offset], &[std]))
+            .collect()
+    }
+
     #[test]
     fn trajectory_score_ranks_sharp_and_right_over_vague_over_sharp_and_wrong() {
-        // 100 steps of one entry moving from 0 to 1.
-        let recorded: Vec<Vec<f64>> = (0..=100).map(|t| vec![t as f64 / 100.0]).collect();
-        let predict = |offset: f64, std: f64| -> Vec<PredictedStep> {
-            (1..=100)
-                .map(|t| step(&[t as f64 / 100.0 + offset], &[std]))
-                .collect()
-        };
+        let (recorded, predict) = (ramp(), predict_ramp);
         let sharp_right = trajectory_score(&predict(0.001, 0.01), &recorded);
         let vague = trajectory_score(&predict(0.0, 1.0), &recorded);
         let sharp_wrong = trajectory_score(&predict(0.2, 0.01), &recorded);
@@ -342,12 +348,7 @@ mod tests {
 
     #[test]
     fn robust_trajectory_score_still_ranks_sharp_and_right_over_vague_over_sharp_and_wrong() {
-        let recorded: Vec<Vec<f64>> = (0..=100).map(|t| vec![t as f64 / 100.0]).collect();
-        let predict = |offset: f64, std: f64| -> Vec<PredictedStep> {
-            (1..=100)
-                .map(|t| step(&[t as f64 / 100.0 + offset], &[std]))
-                .collect()
-        };
+        let (recorded, predict) = (ramp(), predict_ramp);
         let score = |offset, std| robust_trajectory_score(&predict(offset, std), &recorded);
         assert!(score(0.001, 0.01) < score(0.0, 1.0));
         assert!(score(0.0, 1.0) < score(0.2, 0.01));
