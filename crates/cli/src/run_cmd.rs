@@ -28,6 +28,12 @@ pub struct Args {
     /// number of updates may grow). The continued run equals an uninterrupted one bit for bit.
     #[arg(long)]
     resume: bool,
+    /// Start from the recorded run in DIR (same experiment, seed and settings but
+    /// gp.model_selection, e.g. a shipped run and a probe's rule): its model fits are replayed,
+    /// its updates kept while this run's rule chooses the same models, and the run continues
+    /// from the first update where the rules part. Writes to --out, never to DIR.
+    #[arg(long, value_name = "DIR", conflicts_with = "resume")]
+    replay_from: Option<PathBuf>,
 }
 
 /// A progress bar over policy updates showing the phase, the current objective J and ETA.
@@ -97,6 +103,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         quick: args.quick,
         config: args.config,
         resume: args.resume,
+        replay_from: args.replay_from,
     };
     let total = vicpilco_experiments::planned_updates(&args.name, &opts)
         .with_context(|| format!("running `{}`", args.name))?;

@@ -415,6 +415,7 @@ mod tests {
             final_gains: None,
             final_mean_gains: None,
             sessions: Vec::new(),
+            replayed_from: None,
         }
     }
 

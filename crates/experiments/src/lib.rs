@@ -24,6 +24,7 @@ pub mod checks;
 pub mod classic;
 pub mod config;
 pub mod record;
+pub mod replay;
 pub mod subnormals;
 pub mod summary;
 
@@ -92,6 +93,10 @@ pub struct RunOptions {
     pub config: Option<PathBuf>,
     /// Continue the run in `out` from its `checkpoint.json`.
     pub resume: bool,
+    /// Start from the recorded run in this directory (same experiment, seed and settings but
+    /// `gp.model_selection`): keep its updates while this run's rule chooses as it did, and
+    /// continue from the first update where the rules part ([`replay`]).
+    pub replay_from: Option<PathBuf>,
 }
 
 /// Policy updates of a `--quick` run.
@@ -301,10 +306,18 @@ where
     P: Policy + Clone + Sync,
     P::Cache: Send,
 {
-    let checkpoint = if opts.resume {
-        Some(read_checkpoint(&opts.out, name, opts.seed, &meta.identity)?)
-    } else {
-        None
+    let checkpoint = match (&opts.replay_from, opts.resume) {
+        (_, true) => Some(read_checkpoint(&opts.out, name, opts.seed, &meta.identity)?),
+        (Some(source), false) => Some(replay::graft(
+            source,
+            name,
+            opts.seed,
+            &meta.identity,
+            &setup,
+            &opts.out,
+            env.dt(),
+        )?),
+        (None, false) => None,
     };
     let keep = checkpoint.as_ref().map(|c| c.state.completed);
     let rollouts = open_jsonl(&opts.out.join("rollouts.jsonl"), keep)?;
@@ -334,6 +347,7 @@ where
             final_gains: None,
             final_mean_gains: None,
             sessions: Vec::new(),
+            replayed_from: None,
         },
     };
     summary

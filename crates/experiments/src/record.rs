@@ -136,16 +136,7 @@ pub fn read_checkpoint(
         path: path.clone(),
         message,
     };
-    let text =
-        std::fs::read_to_string(&path).map_err(|e| bad(format!("nothing to resume ({e})")))?;
-    let format: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
-    if format["format"].as_u64() != Some(CHECKPOINT_FORMAT as u64) {
-        return Err(bad(format!(
-            "format {} cannot be read (expected {CHECKPOINT_FORMAT})",
-            format["format"]
-        )));
-    }
-    let cp: Checkpoint = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+    let cp = read_checkpoint_unchecked(dir)?;
     if cp.experiment != experiment {
         return Err(bad(format!(
             "written by experiment `{}`, not `{experiment}`",
@@ -164,8 +155,31 @@ pub fn read_checkpoint(
     Ok(cp)
 }
 
+/// Read `DIR/checkpoint.json` of any run (format checked, nothing else).
+pub fn read_checkpoint_unchecked(dir: &Path) -> Result<Checkpoint, ExperimentError> {
+    let path = dir.join("checkpoint.json");
+    let bad = |message: String| ExperimentError::Resume {
+        path: path.clone(),
+        message,
+    };
+    let text =
+        std::fs::read_to_string(&path).map_err(|e| bad(format!("nothing to resume ({e})")))?;
+    let format: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+    if format["format"].as_u64() != Some(CHECKPOINT_FORMAT as u64) {
+        return Err(bad(format!(
+            "format {} cannot be read (expected {CHECKPOINT_FORMAT})",
+            format["format"]
+        )));
+    }
+    serde_json::from_str(&text).map_err(|e| bad(e.to_string()))
+}
+
 /// The first path at which two JSON values differ.
-fn first_difference(a: &serde_json::Value, b: &serde_json::Value, at: String) -> Option<String> {
+pub(crate) fn first_difference(
+    a: &serde_json::Value,
+    b: &serde_json::Value,
+    at: String,
+) -> Option<String> {
     use serde_json::Value::{Array, Object};
     match (a, b) {
         (Object(x), Object(y)) => {

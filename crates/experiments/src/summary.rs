@@ -157,6 +157,10 @@ pub struct Summary {
     /// Every invocation of the run, in order; empty in summaries written before this field.
     #[serde(default)]
     pub sessions: Vec<RunSession>,
+    /// A run started with `--replay-from`: the recorded run its first updates are, and the
+    /// replay's verdicts ([`crate::replay`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub replayed_from: Option<crate::replay::ReplaySource>,
 }
 
 /// The final policy from fresh starts (`final_eval.jsonl` holds the roll-outs).
@@ -308,6 +312,7 @@ mod tests {
             final_gains: None,
             final_mean_gains: None,
             sessions: Vec::new(),
+            replayed_from: None,
         };
         let dir = std::env::temp_dir();
         assert!(matches!(s.write(&dir), Err(WriteError::NonFinite { .. })));

@@ -7,11 +7,13 @@
 //! * [`data`]: roll-outs and the GP training set built from them;
 //! * [`outer`]: the learning loop over an [`vicpilco_env::Environment`], with checkpoints;
 //! * [`selection`]: which dynamics model an update optimises on (PILCO's refit or ours);
+//! * [`replay`]: where another selection rule would have parted from a recorded run;
 //! * [`start`]: start distributions of the real episodes.
 
 pub mod data;
 pub mod joint;
 pub mod outer;
+pub mod replay;
 pub mod selection;
 pub mod start;
 pub mod step;

@@ -543,7 +543,7 @@ where
     }
 }
 
-fn mat_rows(m: &Mat<f64>) -> Vec<Vec<f64>> {
+pub(crate) fn mat_rows(m: &Mat<f64>) -> Vec<Vec<f64>> {
     (0..m.nrows())
         .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
         .collect()

@@ -140,6 +140,30 @@ where
             (rule, Some(h), Some(r)) if rule.compares() && ep >= 2 => (h, r),
             _ => return Ok((refit, None)),
         };
+        let kept = self.fit_keeping(inputs, targets, prev_hyp, inducing)?;
+        let record = self.judge(self.model_selection, &self.policy, &refit, &kept, last)?;
+        tracing::debug!(
+            ep,
+            refit_score = record.refit_score,
+            previous_score = record.previous_score,
+            kept_previous = record.kept_previous,
+            "model selection"
+        );
+        Ok((
+            if record.kept_previous { kept } else { refit },
+            Some(record),
+        ))
+    }
+
+    /// The training set's model under `prev_hyp` unchanged (a sparse GP still fits its
+    /// inducing inputs, warm-started from `inducing`).
+    pub(crate) fn fit_keeping(
+        &self,
+        inputs: Mat<f64>,
+        targets: Mat<f64>,
+        prev_hyp: &[Hyper],
+        inducing: Option<&Mat<f64>>,
+    ) -> Result<DynamicsModel, LearnError> {
         let (kept, _) = DynamicsModel::fit(
             inputs,
             targets,
@@ -147,23 +171,26 @@ where
             inducing.map(|m| m.as_ref()),
             &self.dynamics.keeping_hyper_parameters(),
         )?;
-        let refit_score = self.score_on_rollout(&self.policy, &refit, last)?;
-        let previous_score = self.score_on_rollout(&self.policy, &kept, last)?;
-        // Ties keep the refit: PILCO's model unless the previous one is better.
-        let kept_previous = previous_score < refit_score;
-        tracing::debug!(
-            ep,
+        Ok(kept)
+    }
+
+    /// `rule`'s verdict between `refit` and `kept` on `newest`, the roll-out of `policy`.
+    /// Ties keep the refit: PILCO's model unless the previous one is better.
+    pub(crate) fn judge(
+        &self,
+        rule: ModelSelection,
+        policy: &P,
+        refit: &DynamicsModel,
+        kept: &DynamicsModel,
+        newest: &Rollout,
+    ) -> Result<SelectionRecord, LearnError> {
+        let refit_score = self.score_on_rollout(rule, policy, refit, newest)?;
+        let previous_score = self.score_on_rollout(rule, policy, kept, newest)?;
+        Ok(SelectionRecord {
             refit_score,
             previous_score,
-            kept_previous,
-            "model selection"
-        );
-        let record = SelectionRecord {
-            refit_score,
-            previous_score,
-            kept_previous,
-        };
-        Ok((if kept_previous { kept } else { refit }, Some(record)))
+            kept_previous: previous_score < refit_score,
+        })
     }
 
     /// The selection rule's score (lower is better) of `model`'s prediction of `policy` from
@@ -173,6 +200,7 @@ where
     /// else [`rollout_score`] against `r`'s return.
     fn score_on_rollout(
         &self,
+        rule: ModelSelection,
         policy: &P,
         model: &DynamicsModel,
         r: &Rollout,
@@ -192,7 +220,7 @@ where
             &[(start.clone(), cov)],
             false,
         )?;
-        let state_score = match self.model_selection {
+        let state_score = match rule {
             ModelSelection::LastRolloutStates => {
                 Some(trajectory_score as fn(&[PredictedStep], &[Vec<f64>]) -> f64)
             }

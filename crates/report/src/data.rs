@@ -119,6 +119,16 @@ pub(crate) struct Summary {
     pub final_mean_gains: Option<[f64; 2]>,
     /// Each invocation of the run (empty in summaries written before they were recorded).
     pub sessions: Vec<Session>,
+    /// A run started with `--replay-from`: the recorded run its first updates are.
+    pub replayed_from: Option<ReplaySource>,
+}
+
+/// `summary.json`'s `replayed_from`.
+pub(crate) struct ReplaySource {
+    pub run: String,
+    pub recorded_rule: String,
+    pub recorded_updates: u64,
+    pub agreed: u64,
 }
 
 /// One invocation of a run: the first update it computed and the build that ran it.
@@ -179,6 +189,23 @@ impl Summary {
             }
         }
         parts.join("; ")
+    }
+
+    /// "updates 1–k: the recorded run RUN (rule R, N updates); the rules part at k+1", or
+    /// "–" for a run of its own from the start.
+    pub fn replayed_text(&self) -> String {
+        let Some(r) = &self.replayed_from else {
+            return "–".into();
+        };
+        let parting = if r.agreed < r.recorded_updates {
+            format!("; this run's rule parts from it at update {}", r.agreed + 1)
+        } else {
+            "; this run's rule chooses alike on all of them".into()
+        };
+        format!(
+            "updates 1–{}: the recorded run {} (rule {}, {} updates){parting}",
+            r.agreed, r.run, r.recorded_rule, r.recorded_updates
+        )
     }
 
     /// Wall time over policy updates (initial roll-outs included in the wall time).

@@ -280,6 +280,7 @@ fn totals(h: &mut String, run: &Run) {
         ("policy updates", s.episodes.len().to_string()),
         ("solved at", s.solved_text()),
         ("code (commit, subnormals) per update", s.sessions_text()),
+        ("updates from a recorded run", s.replayed_text()),
     ] {
         let _ = writeln!(h, "<tr><th>{k}</th><td class=\"num\">{}</td></tr>", esc(&v));
     }

@@ -181,6 +181,7 @@ fn totals(h: &mut String, run: &Run) {
         ("interaction time (s)", num(s.interaction_s, 1)),
         ("wall time (s)", num(s.wall_s, 0)),
         ("code (commit, subnormals) per update", s.sessions_text()),
+        ("updates from a recorded run", s.replayed_text()),
         ("mean wall time per update (s)", num(s.wall_per_update(), 0)),
         ("mean train per update (s)", num(mean(|e| e.train_s), 0)),
         (

@@ -491,3 +491,30 @@ fn totals_say_which_build_computed_which_updates() {
     assert_eq!(code_row(&markdown(tmp.path())), expected);
     assert!(html(tmp.path()).contains(&expected));
 }
+
+#[test]
+fn totals_say_which_updates_a_run_took_from_a_recorded_run() {
+    let tmp = TempDir::new("replayed");
+    write_run(tmp.path(), Kind::Vil);
+    write_report(tmp.path()).unwrap();
+    let replay_row = |page: &str| {
+        md_rows(page, "## Totals")
+            .into_iter()
+            .find(|r| r[0].starts_with("updates from a recorded run"))
+            .map(|r| r[1].to_string())
+            .expect("a replay row")
+    };
+    assert_eq!(replay_row(&markdown(tmp.path())), "–");
+    edit_json(&tmp.path().join("summary.json"), |v| {
+        v["replayed_from"] = serde_json::json!({
+            "run": "runs/shipped", "recorded_rule": "last-rollout-states",
+            "recorded_updates": 25, "agreed": 2, "updates": []
+        });
+    });
+    write_report(tmp.path()).unwrap();
+    let expected = "updates 1–2: the recorded run runs/shipped (rule last-rollout-states, 25 \
+                    updates); this run's rule parts from it at update 3";
+    assert_eq!(replay_row(&markdown(tmp.path())), expected);
+    assert!(html(tmp.path()).contains("the recorded run runs/shipped (rule last-rollout-states"));
+    assert!(html(tmp.path()).contains("parts from it at update 3"));
+}

@@ -1,6 +1,6 @@
 //! Parsing `summary.json` (the one file a run directory must have) into [`Summary`].
 
-use super::{Claim, Colour, Episode, Geometry, SeedRule, Session, Summary};
+use super::{Claim, Colour, Episode, Geometry, ReplaySource, SeedRule, Session, Summary};
 use crate::json::Node;
 use crate::ReportError;
 use serde_json::Value;
@@ -41,6 +41,16 @@ pub(super) fn parse_summary(n: Node<'_>) -> Result<Summary, ReportError> {
                 .transpose()
                 .map(Option::unwrap_or_default)
         })?,
+        replayed_from: n.with("replayed_from", |r| r.map(parse_replay_source).transpose())?,
+    })
+}
+
+fn parse_replay_source(n: Node<'_>) -> Result<ReplaySource, ReportError> {
+    Ok(ReplaySource {
+        run: n.req("run", |c| c.string())?,
+        recorded_rule: n.req("recorded_rule", |c| c.string())?,
+        recorded_updates: n.req_u64("recorded_updates")?,
+        agreed: n.req_u64("agreed")?,
     })
 }
 

@@ -1,0 +1,207 @@
+//! Would another model-selection rule have made a recorded run's choices? Replays the run's
+//! model training update by update on its recorded roll-outs and policies, checks that each
+//! update reproduces the recorded rule's scores, and asks the other rule (the set-up's) for its
+//! verdict, up to the first update where the two rules part.
+//!
+//! Why: every update of a run is fixed by its data, its model and its policy, and the model is
+//! fixed by the chain of choices; so while the other rule chooses as the recorded one did, a
+//! run under the other rule *is* the recorded run, update for update. The replay costs the
+//! model fits only (no policy optimisation), and its [`LoopState`] at the parting update lets
+//! the other rule's run continue from there instead of from the start.
+
+use crate::data::training_set;
+use crate::outer::{EpisodeRecord, LoopSetup, LoopState};
+use crate::selection::{ModelSelection, SelectionRecord};
+use crate::LearnError;
+use vicpilco_gp::train::initial_hyper;
+use vicpilco_gp::DynamicsModel;
+use vicpilco_pilco::policy::Policy;
+
+/// Relative tolerance between a replayed score and the recorded one: the replay must rebuild
+/// the recorded models, not similar ones (same binary: equal bit for bit; a build on another
+/// CPU may round the last digits of sums differently).
+pub const REPLAY_SCORE_TOLERANCE: f64 = 1e-9;
+
+/// One replayed update's verdicts.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ReplayedUpdate {
+    /// 1-based policy update.
+    pub update: usize,
+    /// The recorded rule's scores as replayed (equal to the recorded ones).
+    pub recorded: SelectionRecord,
+    /// The set-up's rule on the same two models.
+    pub other: SelectionRecord,
+}
+
+/// What a replay found.
+#[derive(Clone, Debug)]
+pub struct Replay {
+    /// Updates 1..=`agreed` choose alike under both rules (every update with a choice, and
+    /// the first, which has none).
+    pub agreed: usize,
+    /// Every update with a choice that was replayed, the parting one last if the rules part.
+    pub updates: Vec<ReplayedUpdate>,
+    /// The loop state after update `agreed` under the set-up's rule: the recorded data, policy
+    /// and records of updates 1..=`agreed` (each record's choice scored by the set-up's rule)
+    /// and the replayed hyper-parameters and inducing inputs. [`LoopSetup::resume`] continues
+    /// it as the set-up's own run.
+    pub state: LoopState,
+}
+
+impl<P: Policy + Clone + Sync> LoopSetup<P>
+where
+    P::Cache: Send,
+{
+    /// Replay the run that `recorded` (its final checkpoint state) and `policies` (the policy
+    /// parameters after each update `u`, `policies[u]`, 0 for the untrained one) describe,
+    /// made with `recorded_rule` and this set-up otherwise, and find where this set-up's rule
+    /// would have chosen differently. `on_update` sees each replayed update as it completes.
+    /// Errors if a replayed score differs from the recorded one by more than
+    /// [`REPLAY_SCORE_TOLERANCE`] (the models are not the recorded ones), or if the record is
+    /// incomplete.
+    pub fn replay_selection(
+        &self,
+        recorded_rule: ModelSelection,
+        recorded: &LoopState,
+        policies: &[Vec<f64>],
+        on_update: &mut dyn FnMut(&ReplayedUpdate),
+    ) -> Result<Replay, LearnError> {
+        let bad = |what: String| Err(LearnError::Spec(format!("replay: {what}")));
+        let done = recorded.completed;
+        if recorded.data.len() != self.initial_rollouts + done {
+            return bad(format!(
+                "{} training roll-outs for {} initial roll-outs and {done} updates",
+                recorded.data.len(),
+                self.initial_rollouts
+            ));
+        }
+        if recorded.episodes.len() != done || policies.len() != done + 1 {
+            return bad(format!(
+                "{} update records and {} policies for {done} updates",
+                recorded.episodes.len(),
+                policies.len()
+            ));
+        }
+        let mut policy = self.policy.clone();
+        let mut hyp = None;
+        let mut inducing = None;
+        let mut updates = Vec::new();
+        let mut episodes: Vec<EpisodeRecord> = Vec::new();
+        for ep in 1..=done {
+            let data = &recorded.data[..self.initial_rollouts + ep - 1];
+            let (inputs, targets) = training_set(&self.spec, data, self.prior_shift.as_deref());
+            let recorded_choice = recorded.episodes[ep - 1].model_selection;
+            let comparing =
+                ep >= 2 && (recorded_rule.compares() || self.model_selection.compares());
+            let model = match (comparing, hyp.as_deref()) {
+                (true, Some(prev_hyp)) => {
+                    let refit = DynamicsModel::fit(
+                        inputs.clone(),
+                        targets.clone(),
+                        prev_hyp,
+                        inducing.as_ref().map(|m: &faer::Mat<f64>| m.as_ref()),
+                        &self.dynamics,
+                    )?
+                    .0;
+                    let kept = self.fit_keeping(inputs, targets, prev_hyp, inducing.as_ref())?;
+                    let newest = data
+                        .last()
+                        .ok_or_else(|| LearnError::Spec("replay: an update without data".into()))?;
+                    policy.set_params(&policies[ep - 1])?;
+                    let replayed = self.judge(recorded_rule, &policy, &refit, &kept, newest)?;
+                    let replayed_kept = if recorded_rule.compares() {
+                        let Some(rec) = recorded_choice else {
+                            return bad(format!("update {ep} has no recorded model choice"));
+                        };
+                        check_scores(ep, &rec, &replayed)?;
+                        rec.kept_previous
+                    } else {
+                        false
+                    };
+                    let other = if self.model_selection.compares() {
+                        self.judge(self.model_selection, &policy, &refit, &kept, newest)?
+                    } else {
+                        SelectionRecord {
+                            kept_previous: false,
+                            ..replayed
+                        }
+                    };
+                    let update = ReplayedUpdate {
+                        update: ep,
+                        recorded: replayed,
+                        other,
+                    };
+                    updates.push(update);
+                    on_update(&update);
+                    if other.kept_previous != replayed_kept {
+                        break;
+                    }
+                    episodes.push(EpisodeRecord {
+                        model_selection: self.model_selection.compares().then_some(other),
+                        ..recorded.episodes[ep - 1].clone()
+                    });
+                    if replayed_kept {
+                        kept
+                    } else {
+                        refit
+                    }
+                }
+                _ => {
+                    let init = hyp
+                        .clone()
+                        .unwrap_or_else(|| initial_hyper(inputs.as_ref(), targets.as_ref()));
+                    let (refit, _) = DynamicsModel::fit(
+                        inputs,
+                        targets,
+                        &init,
+                        inducing.as_ref().map(|m: &faer::Mat<f64>| m.as_ref()),
+                        &self.dynamics,
+                    )?;
+                    episodes.push(recorded.episodes[ep - 1].clone());
+                    refit
+                }
+            };
+            hyp = Some(model.hyp().to_vec());
+            if model.is_sparse() {
+                inducing = Some(model.inputs().to_owned());
+            }
+        }
+        let agreed = episodes.len();
+        Ok(Replay {
+            agreed,
+            updates,
+            state: LoopState {
+                completed: agreed,
+                data: recorded.data[..self.initial_rollouts + agreed].to_vec(),
+                hyp,
+                inducing: inducing.as_ref().map(crate::outer::mat_rows),
+                policy_params: policies[agreed].clone(),
+                episodes,
+            },
+        })
+    }
+}
+
+/// Are the replayed scores the recorded ones?
+fn check_scores(
+    ep: usize,
+    recorded: &SelectionRecord,
+    replayed: &SelectionRecord,
+) -> Result<(), LearnError> {
+    let close = |a: f64, b: f64| (a - b).abs() <= REPLAY_SCORE_TOLERANCE * a.abs().max(b.abs());
+    if close(recorded.refit_score, replayed.refit_score)
+        && close(recorded.previous_score, replayed.previous_score)
+        && recorded.kept_previous == replayed.kept_previous
+    {
+        return Ok(());
+    }
+    Err(LearnError::Spec(format!(
+        "replay: update {ep} scores the refit {} and the previous hyper-parameters {} where the \
+         run recorded {} and {}: the replay does not rebuild the run's models (other settings \
+         or code?)",
+        replayed.refit_score,
+        replayed.previous_score,
+        recorded.refit_score,
+        recorded.previous_score
+    )))
+}
