@@ -328,6 +328,12 @@ fn every_arm_run_selects_its_model_on_the_last_roll_out_and_says_it_is_ours() {
         setup.model_selection,
         ModelSelection::LastRolloutStatesRobust
     );
+    let huber = set("\"last-rollout-states-huber\"").unwrap();
+    assert_eq!(
+        huber.gp.model_selection,
+        ModelSelection::LastRolloutStatesHuber
+    );
+    assert!(huber.ours_keys().contains(&"gp.model_selection"));
     let err = set("\"best-guess\"").unwrap_err().to_string();
     assert!(
         err.contains("model_selection") && err.contains("test.toml"),
