@@ -5,6 +5,7 @@ mod acceptance_cmd;
 mod bench_cmd;
 mod oracle_cmd;
 mod report_cmd;
+mod rescore_cmd;
 mod run_cmd;
 mod sim_cmd;
 
@@ -67,6 +68,15 @@ enum Command {
     /// under the claim's rule (3 of 5 seeds, or every run). vil-sic's "mean k_y above GIC's" is
     /// decided against a vil-gic run of the same seed when one is given.
     Acceptance(acceptance_cmd::Args),
+    /// Score a recorded arm run's model choices under every model-selection rule.
+    ///
+    /// Replays the run's model fits update by update along its own choices (no policy
+    /// optimisation; it checks that every replayed score equals the recorded one) and writes,
+    /// per update with a choice, each rule's scores of the refit and of the previous
+    /// hyper-parameters and its choice, as JSON lines. Prints, per rule, the updates where it
+    /// chooses otherwise. Past a rule's first such update, its verdicts are on the recorded
+    /// models, not on those of its own run (`vicpilco run --replay-from` makes that run).
+    Rescore(rescore_cmd::Args),
 }
 
 fn main() -> ExitCode {
@@ -85,6 +95,7 @@ fn main() -> ExitCode {
         Command::Sim(args) => sim_cmd::run(args),
         Command::Report(args) => report_cmd::run(args).map(|()| ExitCode::SUCCESS),
         Command::Acceptance(args) => acceptance_cmd::run(args).map(|()| ExitCode::SUCCESS),
+        Command::Rescore(args) => rescore_cmd::run(args).map(|()| ExitCode::SUCCESS),
     };
     match result {
         Ok(code) => code,

@@ -30,7 +30,7 @@ pub mod summary;
 
 use config::{ArmExperiment, PolicyKind};
 use record::{open_jsonl, read_checkpoint, ClaimsOf, PredictionLabels, Recorder, RolloutExtras};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 use summary::{write_json_atomic, RunSession, Summary};
 use vicpilco_env::classic::{CartPoleScenario, PendulumScenario};
@@ -43,6 +43,8 @@ use vicpilco_pilco::policy::Policy;
 pub enum ExperimentError {
     #[error("unknown experiment `{0}` (known: {known})", known = experiment_names().join(", "))]
     Unknown(String),
+    #[error("`{name}` is not an arm experiment: {what} needs one")]
+    NotArm { name: String, what: &'static str },
     #[error(transparent)]
     Config(#[from] config::ConfigError),
     #[error(transparent)]
@@ -113,7 +115,7 @@ impl RunOptions {
 
 /// The number of policy updates `run` will do with these options.
 pub fn planned_updates(name: &str, opts: &RunOptions) -> Result<usize, ExperimentError> {
-    let default = match load_config(name, opts)? {
+    let default = match load_config(name, opts.config.as_deref())? {
         Some(cfg) => cfg.episodes,
         None if name == "pendulum" => PendulumScenario::default().policy_updates,
         None => CartPoleScenario::default().policy_updates,
@@ -122,8 +124,11 @@ pub fn planned_updates(name: &str, opts: &RunOptions) -> Result<usize, Experimen
 }
 
 /// The arm config of a run (`--config` file, or the shipped one), `None` for the classic ones.
-fn load_config(name: &str, opts: &RunOptions) -> Result<Option<ArmExperiment>, ExperimentError> {
-    Ok(match (&opts.config, name) {
+fn load_config(
+    name: &str,
+    config: Option<&Path>,
+) -> Result<Option<ArmExperiment>, ExperimentError> {
+    Ok(match (config, name) {
         (Some(path), _) => Some(config::load(path)?),
         (None, "pendulum" | "cartpole") => None,
         (None, _) => {
@@ -141,7 +146,7 @@ pub fn run(
     opts: &RunOptions,
     observer: &mut dyn LoopObserver,
 ) -> Result<Summary, ExperimentError> {
-    let cfg = load_config(name, opts)?;
+    let cfg = load_config(name, opts.config.as_deref())?;
     std::fs::create_dir_all(&opts.out).map_err(|e| ExperimentError::Io {
         path: opts.out.clone(),
         source: e,
@@ -233,11 +238,7 @@ fn run_arm(
     if opts.quick {
         cfg.optimiser.length = QUICK_LENGTH;
     }
-    let identity = serde_json::to_value(ArmExperiment {
-        episodes: 0,
-        ..cfg.clone()
-    })
-    .map_err(|e| ExperimentError::Write(e.into()))?;
+    let identity = arm_identity(&cfg)?;
     let planned = cfg.episodes;
     cfg.episodes = opts.episodes_or(cfg.episodes);
     let arm_cfg = arm::arm_config(&cfg);
@@ -291,6 +292,61 @@ fn run_arm(
     summary.write(&opts.out)?;
     vicpilco_report::write_report(&opts.out)?;
     Ok(summary)
+}
+
+/// The settings a resumed or replayed arm run must share with its record: all but the number
+/// of updates.
+fn arm_identity(cfg: &ArmExperiment) -> Result<serde_json::Value, ExperimentError> {
+    serde_json::to_value(ArmExperiment {
+        episodes: 0,
+        ..cfg.clone()
+    })
+    .map_err(|e| ExperimentError::Write(e.into()))
+}
+
+/// What `vicpilco rescore` reads and writes.
+#[derive(Clone, Debug)]
+pub struct RescoreOptions {
+    /// The recorded run's seed.
+    pub seed: u64,
+    /// The recorded run's directory (read only).
+    pub from: PathBuf,
+    /// The settings (`--config` file, or the shipped ones): the recorded run's but for
+    /// `gp.model_selection`, which names the rule reported as `other`.
+    pub config: Option<PathBuf>,
+    /// The JSON-lines file of verdicts, one line per update with a choice (must not exist).
+    pub out: PathBuf,
+    /// The recorded run was a `--quick` one (its settings are then the quick ones).
+    pub quick: bool,
+}
+
+/// Every comparing model-selection rule's verdict at each update of the recorded arm run
+/// `opts.from`, replayed along its own choices ([`replay::rescore`]); a cheap way to compare
+/// rules on recorded runs (the model fits only, no policy optimisation), in the same
+/// floating-point mode as the run ([`subnormals`]).
+pub fn rescore(
+    name: &str,
+    opts: &RescoreOptions,
+) -> Result<Vec<vicpilco_learn::replay::ReplayedUpdate>, ExperimentError> {
+    let mut cfg =
+        load_config(name, opts.config.as_deref())?.ok_or_else(|| ExperimentError::NotArm {
+            name: name.to_string(),
+            what: "rescore",
+        })?;
+    if opts.quick {
+        cfg.optimiser.length = QUICK_LENGTH;
+    }
+    let identity = arm_identity(&cfg)?;
+    subnormals::run_flushed(|| match cfg.policy.kind {
+        PolicyKind::Rbf => {
+            let (setup, _) = arm::setup(&cfg, arm::rbf_policy(&cfg, opts.seed)?, opts.seed)?;
+            replay::rescore(&opts.from, name, opts.seed, &identity, &setup, &opts.out)
+        }
+        PolicyKind::Linear => {
+            let (setup, _) = arm::setup(&cfg, arm::linear_policy(&cfg, opts.seed)?, opts.seed)?;
+            replay::rescore(&opts.from, name, opts.seed, &identity, &setup, &opts.out)
+        }
+    })
 }
 
 /// Run (or resume) the loop with a [`Recorder`] and write the final files.

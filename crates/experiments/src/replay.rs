@@ -50,37 +50,13 @@ where
     P: Policy + Clone + Sync,
     P::Cache: Send,
 {
-    let bad = |message: String| ExperimentError::Resume {
-        path: source.join("checkpoint.json"),
-        message,
-    };
     if out.join("checkpoint.json").exists() {
         return Err(ExperimentError::Resume {
             path: out.join("checkpoint.json"),
             message: "the run directory already holds a run (continue it with --resume)".into(),
         });
     }
-    let recorded = crate::record::read_checkpoint_unchecked(source)?;
-    if recorded.experiment != experiment || recorded.seed != seed {
-        return Err(bad(format!(
-            "a run of `{}` with seed {}, not `{experiment}` with seed {seed}",
-            recorded.experiment, recorded.seed
-        )));
-    }
-    let rule_of = |identity: &serde_json::Value| {
-        serde_json::from_value::<ModelSelection>(identity["gp"]["model_selection"].clone())
-            .map_err(|e| bad(format!("gp.model_selection: {e}")))
-    };
-    let recorded_rule = rule_of(&recorded.identity)?;
-    let (mut a, mut b) = (recorded.identity.clone(), identity.clone());
-    a["gp"]["model_selection"] = serde_json::Value::Null;
-    b["gp"]["model_selection"] = serde_json::Value::Null;
-    if let Some(key) = crate::record::first_difference(&a, &b, String::new()) {
-        return Err(bad(format!(
-            "written with different settings: `{key}` differs (only gp.model_selection may)"
-        )));
-    }
-    let policies = read_policies(source, recorded.state.completed)?;
+    let (recorded, recorded_rule, policies) = open_source(source, experiment, seed, identity)?;
     let replay = setup
         .replay_selection(
             recorded_rule,
@@ -151,6 +127,109 @@ where
     let value = serde_json::to_value(&checkpoint).map_err(|e| ExperimentError::Write(e.into()))?;
     write_json_atomic(&out.join("checkpoint.json"), &value)?;
     Ok(checkpoint)
+}
+
+/// The recorded run in `source`, checked to be of `experiment` and `seed` with `identity`'s
+/// settings but `gp.model_selection`: its final checkpoint, its rule and its policies.
+fn open_source(
+    source: &Path,
+    experiment: &str,
+    seed: u64,
+    identity: &serde_json::Value,
+) -> Result<(Checkpoint, ModelSelection, Vec<Vec<f64>>), ExperimentError> {
+    let bad = |message: String| ExperimentError::Resume {
+        path: source.join("checkpoint.json"),
+        message,
+    };
+    let recorded = crate::record::read_checkpoint_unchecked(source)?;
+    if recorded.experiment != experiment || recorded.seed != seed {
+        return Err(bad(format!(
+            "a run of `{}` with seed {}, not `{experiment}` with seed {seed}",
+            recorded.experiment, recorded.seed
+        )));
+    }
+    let rule_of = |identity: &serde_json::Value| {
+        serde_json::from_value::<ModelSelection>(identity["gp"]["model_selection"].clone())
+            .map_err(|e| bad(format!("gp.model_selection: {e}")))
+    };
+    let recorded_rule = rule_of(&recorded.identity)?;
+    let (mut a, mut b) = (recorded.identity.clone(), identity.clone());
+    a["gp"]["model_selection"] = serde_json::Value::Null;
+    b["gp"]["model_selection"] = serde_json::Value::Null;
+    if let Some(key) = crate::record::first_difference(&a, &b, String::new()) {
+        return Err(bad(format!(
+            "written with different settings: `{key}` differs (only gp.model_selection may)"
+        )));
+    }
+    let policies = read_policies(source, recorded.state.completed)?;
+    Ok((recorded, recorded_rule, policies))
+}
+
+/// Replay the recorded run in `source` (as [`graft`] does) through all its updates along its
+/// own choices, append every comparing rule's verdict at each update with a choice to `out`
+/// as a JSON line ([`ReplayedUpdate`]) as soon as it is known, and return them. `setup`'s own
+/// rule is reported as `other`. Refuses to overwrite `out`.
+pub fn rescore<P>(
+    source: &Path,
+    experiment: &str,
+    seed: u64,
+    identity: &serde_json::Value,
+    setup: &LoopSetup<P>,
+    out: &Path,
+) -> Result<Vec<ReplayedUpdate>, ExperimentError>
+where
+    P: Policy + Clone + Sync,
+    P::Cache: Send,
+{
+    use std::io::Write;
+    let (recorded, recorded_rule, policies) = open_source(source, experiment, seed, identity)?;
+    let io_err = |e: std::io::Error| ExperimentError::Io {
+        path: out.to_path_buf(),
+        source: e,
+    };
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(io_err)?;
+    }
+    let mut file = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(out)
+        .map_err(io_err)?;
+    let mut written: Result<(), ExperimentError> = Ok(());
+    let updates = setup
+        .rescore_run(
+            recorded_rule,
+            &recorded.state,
+            &policies,
+            &mut |u: &ReplayedUpdate| {
+                let verdicts: Vec<String> = u
+                    .every_rule
+                    .iter()
+                    .map(|v| {
+                        let margin = v.choice.previous_score - v.choice.refit_score;
+                        format!(
+                            "{} {} ({margin:+.1})",
+                            v.rule,
+                            choice(v.choice.kept_previous)
+                        )
+                    })
+                    .collect();
+                eprintln!(
+                    "update {:>2}: recorded {}; {}",
+                    u.update,
+                    choice(u.recorded.kept_previous),
+                    verdicts.join(", ")
+                );
+                if written.is_ok() {
+                    written = serde_json::to_string(u)
+                        .map_err(|e| ExperimentError::Write(e.into()))
+                        .and_then(|line| writeln!(file, "{line}").map_err(io_err));
+                }
+            },
+        )
+        .map_err(ExperimentError::from)?;
+    written?;
+    Ok(updates)
 }
 
 fn choice(kept_previous: bool) -> &'static str {

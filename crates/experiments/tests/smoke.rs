@@ -1,7 +1,10 @@
 //! A cut-down learning run (2 policy updates of the pendulum swing-up) writes every file,
 //! records every episode with finite numbers, and the same seed reproduces it exactly.
 
-use vicpilco_experiments::{run, RunOptions};
+use vicpilco_experiments::summary::Summary;
+use vicpilco_experiments::{rescore, run, RescoreOptions, RunOptions};
+use vicpilco_learn::replay::ReplayedUpdate;
+use vicpilco_learn::selection::ModelSelection;
 
 fn run_once(dir: &std::path::Path, seed: u64) -> serde_json::Value {
     let opts = RunOptions {
@@ -342,6 +345,49 @@ fn replaying_a_run_keeps_its_updates_while_the_rules_agree(
     }
     let sessions = &summary.sessions;
     assert_eq!(sessions.last().unwrap().first_update, source.agreed + 1);
+
+    // Rescoring follows the recorded choices through every update and judges each under
+    // every rule: the recorded rule's verdicts are the recorded ones, and up to the state
+    // rule's parting its verdicts are those its replay found.
+    let verdicts = base.join("rescored").join("verdicts.jsonl");
+    let rescore_opts = RescoreOptions {
+        seed: 1,
+        from: full.to_path_buf(),
+        config: Some(states.clone()),
+        out: verdicts.clone(),
+        quick: true,
+    };
+    let rescored = rescore("vil-gic", &rescore_opts).expect("rescore");
+    let recorded: Summary = serde_json::from_str(&read(&full.join("summary.json"))).unwrap();
+    assert_eq!(
+        rescored.iter().map(|u| u.update).collect::<Vec<_>>(),
+        [2, 3]
+    );
+    for u in &rescored {
+        let rules: Vec<_> = u.every_rule.iter().map(|v| v.rule).collect();
+        assert_eq!(rules, ModelSelection::COMPARING);
+        let by_rule = |r| u.every_rule.iter().find(|v| v.rule == r).unwrap().choice;
+        let record = recorded.episodes[u.update - 1].model_selection.unwrap();
+        assert_eq!(by_rule(ModelSelection::LastRollout), record);
+        assert_eq!(u.recorded, record);
+        assert_eq!(by_rule(ModelSelection::LastRolloutStates), u.other);
+    }
+    for (r, s) in rescored.iter().zip(&source.updates) {
+        assert_eq!(r, s);
+    }
+    let lines: Vec<ReplayedUpdate> = read(&verdicts)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines, rescored);
+    let err = rescore("vil-gic", &rescore_opts).unwrap_err().to_string();
+    assert!(err.contains("verdicts.jsonl"), "{err}");
+    let classic = RescoreOptions {
+        config: None,
+        ..rescore_opts.clone()
+    };
+    let err = rescore("pendulum", &classic).unwrap_err().to_string();
+    assert!(err.contains("not an arm experiment"), "{err}");
 
     // Errors: the directory already holds a run; settings other than the rule differ; the
     // record's scores are not what the replay computes.

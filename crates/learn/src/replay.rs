@@ -11,10 +11,11 @@
 
 use crate::data::training_set;
 use crate::outer::{EpisodeRecord, LoopSetup, LoopState};
-use crate::selection::{ModelSelection, SelectionRecord};
+use crate::selection::{verdict_of, ModelSelection, RuleVerdict, SelectionRecord};
 use crate::LearnError;
+use faer::Mat;
 use vicpilco_gp::train::initial_hyper;
-use vicpilco_gp::DynamicsModel;
+use vicpilco_gp::{DynamicsModel, Hyper};
 use vicpilco_pilco::policy::Policy;
 
 /// Relative tolerance between a replayed score and the recorded one: the replay must rebuild
@@ -23,14 +24,19 @@ use vicpilco_pilco::policy::Policy;
 pub const REPLAY_SCORE_TOLERANCE: f64 = 1e-9;
 
 /// One replayed update's verdicts.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ReplayedUpdate {
     /// 1-based policy update.
     pub update: usize,
-    /// The recorded rule's scores as replayed (equal to the recorded ones).
+    /// The recorded rule's scores as replayed (equal to the recorded ones; with
+    /// [`ModelSelection::Likelihood`], which always refits, the return scores).
     pub recorded: SelectionRecord,
     /// The set-up's rule on the same two models.
     pub other: SelectionRecord,
+    /// Every comparing rule on the same two models ([`ModelSelection::COMPARING`]'s order);
+    /// empty in records written before it was kept.
+    #[serde(default)]
+    pub every_rule: Vec<RuleVerdict>,
 }
 
 /// What a replay found.
@@ -46,6 +52,14 @@ pub struct Replay {
     /// and the replayed hyper-parameters and inducing inputs. [`LoopSetup::resume`] continues
     /// it as the set-up's own run.
     pub state: LoopState,
+}
+
+/// Where [`LoopSetup::walk_recorded`] stopped: the updates it completed and the model they
+/// left.
+struct Walked {
+    completed: usize,
+    hyp: Option<Vec<Hyper>>,
+    inducing: Option<Mat<f64>>,
 }
 
 impl<P: Policy + Clone + Sync> LoopSetup<P>
@@ -66,6 +80,73 @@ where
         policies: &[Vec<f64>],
         on_update: &mut dyn FnMut(&ReplayedUpdate),
     ) -> Result<Replay, LearnError> {
+        let mut updates = Vec::new();
+        let mut episodes: Vec<EpisodeRecord> = Vec::new();
+        let walked = self.walk_recorded(recorded_rule, recorded, policies, &mut |ep, u| {
+            let Some(u) = u else {
+                episodes.push(recorded.episodes[ep - 1].clone());
+                return true;
+            };
+            on_update(u);
+            updates.push(u.clone());
+            if u.other.kept_previous != u.recorded.kept_previous {
+                return false;
+            }
+            episodes.push(EpisodeRecord {
+                model_selection: self.model_selection.compares().then_some(u.other),
+                ..recorded.episodes[ep - 1].clone()
+            });
+            true
+        })?;
+        let agreed = walked.completed;
+        Ok(Replay {
+            agreed,
+            updates,
+            state: LoopState {
+                completed: agreed,
+                data: recorded.data[..self.initial_rollouts + agreed].to_vec(),
+                hyp: walked.hyp,
+                inducing: walked.inducing.as_ref().map(crate::outer::mat_rows),
+                policy_params: policies[agreed].clone(),
+                episodes,
+            },
+        })
+    }
+
+    /// Replay the recorded run (as [`Self::replay_selection`]) through all its updates, along
+    /// its own choices, and return every comparing rule's verdict at each update with a
+    /// choice (`on_update` sees each as it completes). Past the first update where a rule
+    /// parts from the recorded one, its verdicts are on the recorded run's models, not on those
+    /// its own run would have had: they say how it judges the recorded models, not what its run
+    /// would have done.
+    pub fn rescore_run(
+        &self,
+        recorded_rule: ModelSelection,
+        recorded: &LoopState,
+        policies: &[Vec<f64>],
+        on_update: &mut dyn FnMut(&ReplayedUpdate),
+    ) -> Result<Vec<ReplayedUpdate>, LearnError> {
+        let mut updates = Vec::new();
+        self.walk_recorded(recorded_rule, recorded, policies, &mut |_, u| {
+            if let Some(u) = u {
+                on_update(u);
+                updates.push(u.clone());
+            }
+            true
+        })?;
+        Ok(updates)
+    }
+
+    /// Rebuild the recorded run's models update by update along its recorded choices, and
+    /// hand each update to `visit` (with its verdicts when it chose a model) until `visit`
+    /// says stop (that update then does not count as completed).
+    fn walk_recorded(
+        &self,
+        recorded_rule: ModelSelection,
+        recorded: &LoopState,
+        policies: &[Vec<f64>],
+        visit: &mut dyn FnMut(usize, Option<&ReplayedUpdate>) -> bool,
+    ) -> Result<Walked, LearnError> {
         let bad = |what: String| Err(LearnError::Spec(format!("replay: {what}")));
         let done = recorded.completed;
         if recorded.data.len() != self.initial_rollouts + done {
@@ -82,103 +163,76 @@ where
                 policies.len()
             ));
         }
+        let missing = |rule: ModelSelection| {
+            LearnError::Spec(format!("replay: no verdict of the rule `{rule}`"))
+        };
         let mut policy = self.policy.clone();
-        let mut hyp = None;
-        let mut inducing = None;
-        let mut updates = Vec::new();
-        let mut episodes: Vec<EpisodeRecord> = Vec::new();
+        let mut walked = Walked {
+            completed: 0,
+            hyp: None,
+            inducing: None,
+        };
         for ep in 1..=done {
             let data = &recorded.data[..self.initial_rollouts + ep - 1];
             let (inputs, targets) = training_set(&self.spec, data, self.prior_shift.as_deref());
             let recorded_choice = recorded.episodes[ep - 1].model_selection;
-            let comparing =
-                ep >= 2 && (recorded_rule.compares() || self.model_selection.compares());
-            let model = match (comparing, hyp.as_deref()) {
-                (true, Some(prev_hyp)) => {
+            let inducing = walked.inducing.as_ref().map(|m| m.as_ref());
+            let (model, go_on) = match walked.hyp.as_deref() {
+                Some(prev_hyp) if ep >= 2 => {
                     let refit = DynamicsModel::fit(
                         inputs.clone(),
                         targets.clone(),
                         prev_hyp,
-                        inducing.as_ref().map(|m: &faer::Mat<f64>| m.as_ref()),
+                        inducing,
                         &self.dynamics,
                     )?
                     .0;
-                    let kept = self.fit_keeping(inputs, targets, prev_hyp, inducing.as_ref())?;
+                    let kept =
+                        self.fit_keeping(inputs, targets, prev_hyp, walked.inducing.as_ref())?;
                     let newest = data
                         .last()
                         .ok_or_else(|| LearnError::Spec("replay: an update without data".into()))?;
                     policy.set_params(&policies[ep - 1])?;
-                    let replayed = self.judge(recorded_rule, &policy, &refit, &kept, newest)?;
-                    let replayed_kept = if recorded_rule.compares() {
+                    let every_rule = self.judge_every_rule(&policy, &refit, &kept, newest)?;
+                    let replayed =
+                        verdict_of(recorded_rule, &every_rule).ok_or(missing(recorded_rule))?;
+                    if recorded_rule.compares() {
                         let Some(rec) = recorded_choice else {
                             return bad(format!("update {ep} has no recorded model choice"));
                         };
                         check_scores(ep, &rec, &replayed)?;
-                        rec.kept_previous
-                    } else {
-                        false
-                    };
-                    let other = if self.model_selection.compares() {
-                        self.judge(self.model_selection, &policy, &refit, &kept, newest)?
-                    } else {
-                        SelectionRecord {
-                            kept_previous: false,
-                            ..replayed
-                        }
-                    };
+                    }
+                    let other = verdict_of(self.model_selection, &every_rule)
+                        .ok_or(missing(self.model_selection))?;
                     let update = ReplayedUpdate {
                         update: ep,
                         recorded: replayed,
                         other,
+                        every_rule,
                     };
-                    updates.push(update);
-                    on_update(&update);
-                    if other.kept_previous != replayed_kept {
-                        break;
-                    }
-                    episodes.push(EpisodeRecord {
-                        model_selection: self.model_selection.compares().then_some(other),
-                        ..recorded.episodes[ep - 1].clone()
-                    });
-                    if replayed_kept {
-                        kept
-                    } else {
-                        refit
-                    }
+                    let go_on = visit(ep, Some(&update));
+                    (if replayed.kept_previous { kept } else { refit }, go_on)
                 }
                 _ => {
-                    let init = hyp
+                    let init = walked
+                        .hyp
                         .clone()
                         .unwrap_or_else(|| initial_hyper(inputs.as_ref(), targets.as_ref()));
-                    let (refit, _) = DynamicsModel::fit(
-                        inputs,
-                        targets,
-                        &init,
-                        inducing.as_ref().map(|m: &faer::Mat<f64>| m.as_ref()),
-                        &self.dynamics,
-                    )?;
-                    episodes.push(recorded.episodes[ep - 1].clone());
-                    refit
+                    let (refit, _) =
+                        DynamicsModel::fit(inputs, targets, &init, inducing, &self.dynamics)?;
+                    (refit, visit(ep, None))
                 }
             };
-            hyp = Some(model.hyp().to_vec());
+            if !go_on {
+                break;
+            }
+            walked.completed = ep;
+            walked.hyp = Some(model.hyp().to_vec());
             if model.is_sparse() {
-                inducing = Some(model.inputs().to_owned());
+                walked.inducing = Some(model.inputs().to_owned());
             }
         }
-        let agreed = episodes.len();
-        Ok(Replay {
-            agreed,
-            updates,
-            state: LoopState {
-                completed: agreed,
-                data: recorded.data[..self.initial_rollouts + agreed].to_vec(),
-                hyp,
-                inducing: inducing.as_ref().map(crate::outer::mat_rows),
-                policy_params: policies[agreed].clone(),
-                episodes,
-            },
-        })
+        Ok(walked)
     }
 }
 

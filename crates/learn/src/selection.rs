@@ -52,9 +52,30 @@ pub enum ModelSelection {
 }
 
 impl ModelSelection {
+    /// Every rule that compares the refit with the previous hyper-parameters.
+    pub const COMPARING: [ModelSelection; 4] = [
+        ModelSelection::LastRollout,
+        ModelSelection::LastRolloutStates,
+        ModelSelection::LastRolloutStatesRobust,
+        ModelSelection::LastRolloutStatesHuber,
+    ];
+
     /// Does this rule compare the refit with the previous hyper-parameters?
     pub fn compares(self) -> bool {
         !matches!(self, ModelSelection::Likelihood)
+    }
+}
+
+/// The config name (`gp.model_selection`), as serde spells it.
+impl std::fmt::Display for ModelSelection {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            ModelSelection::Likelihood => "likelihood",
+            ModelSelection::LastRollout => "last-rollout",
+            ModelSelection::LastRolloutStates => "last-rollout-states",
+            ModelSelection::LastRolloutStatesRobust => "last-rollout-states-robust",
+            ModelSelection::LastRolloutStatesHuber => "last-rollout-states-huber",
+        })
     }
 }
 
@@ -155,6 +176,13 @@ pub struct SelectionRecord {
     pub kept_previous: bool,
 }
 
+/// One comparing rule's choice between the same two models.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RuleVerdict {
+    pub rule: ModelSelection,
+    pub choice: SelectionRecord,
+}
+
 impl<P: Policy + Clone + Sync> LoopSetup<P>
 where
     P::Cache: Send,
@@ -220,28 +248,47 @@ where
         kept: &DynamicsModel,
         newest: &Rollout,
     ) -> Result<SelectionRecord, LearnError> {
-        let refit_score = self.score_on_rollout(rule, policy, refit, newest)?;
-        let previous_score = self.score_on_rollout(rule, policy, kept, newest)?;
-        Ok(SelectionRecord {
-            refit_score,
-            previous_score,
-            kept_previous: previous_score < refit_score,
-        })
+        verdict_of(rule, &self.judge_every_rule(policy, refit, kept, newest)?)
+            .ok_or_else(|| LearnError::Spec(format!("no verdict of the rule `{rule}`")))
     }
 
-    /// The selection rule's score (lower is better) of `model`'s prediction of `policy` from
-    /// `r`'s start (the first prediction start's covariance around `r`'s true start state):
-    /// [`trajectory_score`] (or [`robust_trajectory_score`], [`huber_trajectory_score`])
-    /// against `r`'s true states with [`ModelSelection::LastRolloutStates`] (or
-    /// [`ModelSelection::LastRolloutStatesRobust`], [`ModelSelection::LastRolloutStatesHuber`]),
-    /// else [`rollout_score`] against `r`'s return.
-    fn score_on_rollout(
+    /// Every comparing rule's verdict between `refit` and `kept` on `newest`, the roll-out of
+    /// `policy`, in the order of [`ModelSelection::COMPARING`]: one long-term prediction per
+    /// model serves them all.
+    pub(crate) fn judge_every_rule(
         &self,
-        rule: ModelSelection,
+        policy: &P,
+        refit: &DynamicsModel,
+        kept: &DynamicsModel,
+        newest: &Rollout,
+    ) -> Result<Vec<RuleVerdict>, LearnError> {
+        let refit_scores = self.scores_on_rollout(policy, refit, newest)?;
+        let previous_scores = self.scores_on_rollout(policy, kept, newest)?;
+        Ok(ModelSelection::COMPARING
+            .iter()
+            .zip(refit_scores.iter().zip(&previous_scores))
+            .map(|(&rule, (&refit_score, &previous_score))| RuleVerdict {
+                rule,
+                choice: SelectionRecord {
+                    refit_score,
+                    previous_score,
+                    kept_previous: previous_score < refit_score,
+                },
+            })
+            .collect())
+    }
+
+    /// Each comparing rule's score (lower is better; the order of
+    /// [`ModelSelection::COMPARING`]) of `model`'s prediction of `policy` from `r`'s start (the
+    /// first prediction start's covariance around `r`'s true start state): [`rollout_score`]
+    /// against `r`'s return, then [`trajectory_score`], [`robust_trajectory_score`] and
+    /// [`huber_trajectory_score`] against `r`'s true states.
+    fn scores_on_rollout(
+        &self,
         policy: &P,
         model: &DynamicsModel,
         r: &Rollout,
-    ) -> Result<f64, LearnError> {
+    ) -> Result<[f64; 4], LearnError> {
         let cov = self
             .prediction_starts
             .first()
@@ -257,29 +304,37 @@ where
             &[(start.clone(), cov)],
             false,
         )?;
-        let state_score = match rule {
-            ModelSelection::LastRolloutStates => {
-                Some(trajectory_score as fn(&[PredictedStep], &[Vec<f64>]) -> f64)
-            }
-            ModelSelection::LastRolloutStatesRobust => Some(robust_trajectory_score as _),
-            ModelSelection::LastRolloutStatesHuber => Some(huber_trajectory_score as _),
-            ModelSelection::Likelihood | ModelSelection::LastRollout => None,
-        };
-        if let Some(state_score) = state_score {
-            let predicted = out
-                .trajectories
-                .first()
-                .ok_or_else(|| LearnError::Spec("a prediction without a trajectory".into()))?;
-            let d = self.spec.state_dim;
-            let recorded: Vec<Vec<f64>> = r
-                .true_states
-                .iter()
-                .map(|x| x.iter().take(d).copied().collect())
-                .collect();
-            return Ok(state_score(predicted, &recorded));
-        }
+        let predicted = out
+            .trajectories
+            .first()
+            .ok_or_else(|| LearnError::Spec("a prediction without a trajectory".into()))?;
+        let d = self.spec.state_dim;
+        let recorded: Vec<Vec<f64>> = r
+            .true_states
+            .iter()
+            .map(|x| x.iter().take(d).copied().collect())
+            .collect();
         let (mean, std) = self.ret.predicted_return(&out);
-        Ok(rollout_score(mean, std, self.recorded_return(r)))
+        Ok([
+            rollout_score(mean, std, self.recorded_return(r)),
+            trajectory_score(predicted, &recorded),
+            robust_trajectory_score(predicted, &recorded),
+            huber_trajectory_score(predicted, &recorded),
+        ])
+    }
+}
+
+/// `rule`'s verdict among `every_rule` (as [`LoopSetup::judge_every_rule`] returns them), if
+/// it is there. [`ModelSelection::Likelihood`] always refits; its record carries the return
+/// scores of [`ModelSelection::LastRollout`] for reference.
+pub fn verdict_of(rule: ModelSelection, every_rule: &[RuleVerdict]) -> Option<SelectionRecord> {
+    let of = |r: ModelSelection| every_rule.iter().find(|v| v.rule == r).map(|v| v.choice);
+    match rule {
+        ModelSelection::Likelihood => of(ModelSelection::LastRollout).map(|c| SelectionRecord {
+            kept_previous: false,
+            ..c
+        }),
+        rule => of(rule),
     }
 }
 
@@ -309,6 +364,20 @@ mod tests {
             cost_var: 0.0,
             energy_mean: 0.0,
             immediate: 0.0,
+        }
+    }
+
+    #[test]
+    fn a_rule_displays_as_its_config_name() {
+        use super::ModelSelection;
+        for rule in [ModelSelection::Likelihood]
+            .into_iter()
+            .chain(ModelSelection::COMPARING)
+        {
+            assert_eq!(
+                serde_json::to_value(rule).unwrap(),
+                serde_json::Value::String(rule.to_string())
+            );
         }
     }
 
