@@ -214,10 +214,10 @@ pub struct GpConfig {
     /// How each update picks its model's hyper-parameters: `"likelihood"` (the default,
     /// PILCO's: the refit), `"last-rollout"` (ours: the refit or the previous update's
     /// hyper-parameters, whichever predicts the newest roll-out's return better) or
-    /// `"last-rollout-states"` (ours, vil-sic's: the same choice on the roll-out's predicted
-    /// states), `"last-rollout-states-robust"` (ours: on the states with a Student-t
-    /// density per entry) or `"last-rollout-states-huber"` (ours: on the states with a
-    /// Huber density per entry; `vicpilco_learn::selection::ModelSelection`).
+    /// `"last-rollout-states"` (ours: the same choice on the roll-out's predicted states),
+    /// `"last-rollout-states-robust"` (ours: on the states with a Student-t density per
+    /// entry) or `"last-rollout-states-huber"` (ours, vil-sic's: on the states with a Huber
+    /// density per entry; `vicpilco_learn::selection::ModelSelection`).
     #[serde(default, skip_serializing_if = "is_likelihood")]
     pub model_selection: ModelSelection,
 }

@@ -286,10 +286,11 @@ fn sensor_noise_is_on_unless_switched_off_and_then_an_ours_key() {
 fn every_arm_run_selects_its_model_on_the_last_roll_out_and_says_it_is_ours() {
     for (name, _) in CONFIGS {
         let c = shipped(name);
-        // vil-sic scores the candidates on the roll-out's states: on it the return rule keeps
-        // an early, wide model for good (EXPERIMENTS.md, "The selection's lock-in").
+        // vil-sic scores the candidates on the roll-out's states (on it the return rule keeps
+        // an early, wide model for good: EXPERIMENTS.md, "The selection's lock-in"), each entry
+        // by Huber's density (the hole's force impulse must not decide: eighth session).
         let rule = if *name == "vil-sic" {
-            ModelSelection::LastRolloutStates
+            ModelSelection::LastRolloutStatesHuber
         } else {
             ModelSelection::LastRollout
         };

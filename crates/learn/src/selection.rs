@@ -26,8 +26,9 @@ pub enum ModelSelection {
     /// refit can reach hyper-parameters whose long-term prediction of the very roll-out just
     /// added is off by its whole spread (EXPERIMENTS.md).
     LastRollout,
-    /// Ours, vil-sic's rule (the GIC and VILTA configs keep [`Self::LastRollout`], with
-    /// which their acceptance runs were made): as [`Self::LastRollout`], but each
+    /// Ours (vil-sic's rule until 2026-12-03; the GIC and VILTA configs keep
+    /// [`Self::LastRollout`], with which their acceptance runs were made): as
+    /// [`Self::LastRollout`], but each
     /// model is scored on the whole predicted state trajectory of the newest roll-out
     /// ([`trajectory_score`]) instead of its return. Why: one recorded return is one number,
     /// and a model that predicts every policy's return as wide as the range of outcomes
@@ -41,13 +42,15 @@ pub enum ModelSelection {
     /// seed 5 leave, at update 23, a model that predicted the return to within its spread
     /// (EXPERIMENTS.md, "A bounded state score").
     LastRolloutStatesRobust,
-    /// Ours: as [`Self::LastRolloutStates`], with each state entry scored by Huber's
-    /// density ([`huber_trajectory_score`]): the Gaussian within
+    /// Ours, vil-sic's rule: as [`Self::LastRolloutStates`], with each state entry scored by
+    /// Huber's density ([`huber_trajectory_score`]): the Gaussian within
     /// [`HUBER_SCORE_THRESHOLD`] standard deviations, linear in |z| beyond. Why: the same
     /// impulse as [`Self::LastRolloutStatesRobust`]'s, but an entry predicted within 5σ is
-    /// scored exactly as by the shipped rule, so the rule changes a choice only where an
-    /// entry lies farther out than a moment-matched Gaussian can mean (EXPERIMENTS.md,
-    /// seventh session).
+    /// scored exactly as by [`Self::LastRolloutStates`], so the rule changes a choice only
+    /// where an entry lies farther out than a moment-matched Gaussian can mean. On vil-sic's
+    /// five seeds it chose as [`Self::LastRolloutStates`] at every update but two, both
+    /// decided by such impulses, and its runs insert in the last 5 updates on all five
+    /// (EXPERIMENTS.md, seventh and eighth sessions).
     LastRolloutStatesHuber,
 }
 
