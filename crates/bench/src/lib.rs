@@ -14,7 +14,8 @@ use vicpilco_pilco::squash::{PartialSat, SatRange};
 
 #[derive(Debug, thiserror::Error)]
 pub enum WorkloadError {
-    #[error("{path}: {source}")]
+    /// The path only: the I/O error is the source, which `{:#}` prints after it.
+    #[error("{}", path.display())]
     Io {
         path: PathBuf,
         source: std::io::Error,

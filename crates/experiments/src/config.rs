@@ -47,7 +47,8 @@ pub enum ConfigError {
         key: String,
         message: String,
     },
-    #[error("{path}: {source}")]
+    /// The path only: the I/O error is the source, which `{:#}` prints after it.
+    #[error("{path}")]
     Read {
         path: String,
         source: std::io::Error,

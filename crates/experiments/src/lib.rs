@@ -57,13 +57,17 @@ pub enum ExperimentError {
     Env(#[from] vicpilco_env::EnvError),
     #[error(transparent)]
     Write(#[from] summary::WriteError),
-    #[error("{path}: {source}")]
+    /// The path only: the I/O error is the source, which `{:#}` prints after it.
+    #[error("{}", path.display())]
     Io {
         path: PathBuf,
         source: std::io::Error,
     },
     #[error("cannot resume from {path}: {message}")]
     Resume { path: PathBuf, message: String },
+    /// A recorded run that `--replay-from` or `rescore` cannot replay under these settings.
+    #[error("cannot replay the recorded run {path}: {message}")]
+    Replay { path: PathBuf, message: String },
     #[error(transparent)]
     Report(#[from] vicpilco_report::ReportError),
 }

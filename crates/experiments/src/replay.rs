@@ -137,7 +137,7 @@ fn open_source(
     seed: u64,
     identity: &serde_json::Value,
 ) -> Result<(Checkpoint, ModelSelection, Vec<Vec<f64>>), ExperimentError> {
-    let bad = |message: String| ExperimentError::Resume {
+    let bad = |message: String| ExperimentError::Replay {
         path: source.join("checkpoint.json"),
         message,
     };
@@ -157,8 +157,13 @@ fn open_source(
     a["gp"]["model_selection"] = serde_json::Value::Null;
     b["gp"]["model_selection"] = serde_json::Value::Null;
     if let Some(key) = crate::record::first_difference(&a, &b, String::new()) {
+        let hint = if key == "optimiser.length" {
+            "; a --quick run is replayed with --quick"
+        } else {
+            ""
+        };
         return Err(bad(format!(
-            "written with different settings: `{key}` differs (only gp.model_selection may)"
+            "written with different settings: `{key}` differs (only gp.model_selection may{hint})"
         )));
     }
     let policies = read_policies(source, recorded.state.completed)?;
@@ -250,7 +255,7 @@ fn read_policies(dir: &Path, completed: usize) -> Result<Vec<Vec<f64>>, Experime
             episode: usize,
             params: Vec<f64>,
         }
-        let l: Line = serde_json::from_str(line).map_err(|e| resume_err(&path, i, e))?;
+        let l: Line = serde_json::from_str(line).map_err(|e| source_err(&path, i, e))?;
         if let Some(slot) = policies.get_mut(l.episode) {
             *slot = Some(l.params);
         }
@@ -259,7 +264,7 @@ fn read_policies(dir: &Path, completed: usize) -> Result<Vec<Vec<f64>>, Experime
         .into_iter()
         .enumerate()
         .map(|(u, p)| {
-            p.ok_or_else(|| ExperimentError::Resume {
+            p.ok_or_else(|| ExperimentError::Replay {
                 path: path.clone(),
                 message: format!("no policy of update {u}"),
             })
@@ -277,7 +282,7 @@ fn interaction_upto(dir: &Path, upto: usize, dt: f64) -> Result<f64, ExperimentE
             episode: usize,
             rollout: Rollout,
         }
-        let l: Line = serde_json::from_str(line).map_err(|e| resume_err(&path, i, e))?;
+        let l: Line = serde_json::from_str(line).map_err(|e| source_err(&path, i, e))?;
         if l.episode <= upto {
             total += l.rollout.len() as f64 * dt;
         }
@@ -297,8 +302,8 @@ fn read_lines(path: &PathBuf) -> Result<Vec<String>, ExperimentError> {
         .collect())
 }
 
-fn resume_err(path: &Path, line: usize, e: serde_json::Error) -> ExperimentError {
-    ExperimentError::Resume {
+fn source_err(path: &Path, line: usize, e: serde_json::Error) -> ExperimentError {
+    ExperimentError::Replay {
         path: path.to_path_buf(),
         message: format!("line {}: {e}", line + 1),
     }

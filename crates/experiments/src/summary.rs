@@ -188,7 +188,8 @@ pub fn solved_at<E: std::ops::Deref<Target = EpisodeRecord>>(episodes: &[E]) -> 
 
 #[derive(Debug, thiserror::Error)]
 pub enum WriteError {
-    #[error("{path}: {source}")]
+    /// The path only: the I/O error is the source, which `{:#}` prints after it.
+    #[error("{path}")]
     Io {
         path: String,
         source: std::io::Error,

@@ -21,7 +21,8 @@ use thiserror::Error;
 pub enum OracleError {
     #[error("oracle directory {path}: {detail}")]
     Dir { path: PathBuf, detail: String },
-    #[error("{path}: {source}")]
+    /// The path only: the I/O error is the source, which `{:#}` prints after it.
+    #[error("{}", path.display())]
     Io {
         path: PathBuf,
         source: std::io::Error,
