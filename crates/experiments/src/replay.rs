@@ -225,11 +225,10 @@ where
                     choice(u.recorded.kept_previous),
                     verdicts.join(", ")
                 );
-                if written.is_ok() {
-                    written = serde_json::to_string(u)
-                        .map_err(|e| ExperimentError::Write(e.into()))
-                        .and_then(|line| writeln!(file, "{line}").map_err(io_err));
-                }
+                written = serde_json::to_string(u)
+                    .map_err(|e| ExperimentError::Write(e.into()))
+                    .and_then(|line| writeln!(file, "{line}").map_err(io_err));
+                written.is_ok()
             },
         )
         .map_err(ExperimentError::from)?;

@@ -115,7 +115,8 @@ where
 
     /// Replay the recorded run (as [`Self::replay_selection`]) through all its updates, along
     /// its own choices, and return every comparing rule's verdict at each update with a
-    /// choice (`on_update` sees each as it completes). Past the first update where a rule
+    /// choice (`on_update` sees each as it completes, and stops the replay by returning
+    /// false, e.g. when the verdict could not be written). Past the first update where a rule
     /// parts from the recorded one, its verdicts are on the recorded run's models, not on those
     /// its own run would have had: they say how it judges the recorded models, not what its run
     /// would have done.
@@ -124,15 +125,15 @@ where
         recorded_rule: ModelSelection,
         recorded: &LoopState,
         policies: &[Vec<f64>],
-        on_update: &mut dyn FnMut(&ReplayedUpdate),
+        on_update: &mut dyn FnMut(&ReplayedUpdate) -> bool,
     ) -> Result<Vec<ReplayedUpdate>, LearnError> {
         let mut updates = Vec::new();
-        self.walk_recorded(recorded_rule, recorded, policies, &mut |_, u| {
-            if let Some(u) = u {
-                on_update(u);
+        self.walk_recorded(recorded_rule, recorded, policies, &mut |_, u| match u {
+            Some(u) => {
                 updates.push(u.clone());
+                on_update(u)
             }
-            true
+            None => true,
         })?;
         Ok(updates)
     }
