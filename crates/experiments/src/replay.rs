@@ -17,8 +17,12 @@ use vicpilco_pilco::policy::Policy;
 /// Where a run's first updates came from, in its `summary.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ReplaySource {
-    /// The recorded run directory.
+    /// The recorded run directory, as given on the machine that replayed it.
     pub run: String,
+    /// The recorded run's return at each of its updates: what identifies it on another
+    /// machine (against `results/*/summary.json`), where `run` names nothing.
+    #[serde(default)]
+    pub recorded_returns: Vec<f64>,
     /// Its model-selection rule.
     pub recorded_rule: ModelSelection,
     /// Its updates.
@@ -89,6 +93,11 @@ where
     }
     let agreed = replay.agreed;
     let mut summary = recorded.summary;
+    let recorded_returns = summary
+        .episodes
+        .iter()
+        .map(|e| e.record.recorded_return)
+        .collect();
     summary.episodes.truncate(agreed);
     for (e, record) in summary.episodes.iter_mut().zip(&replay.state.episodes) {
         e.record = record.clone();
@@ -111,6 +120,7 @@ where
     summary.sessions.retain(|s| s.first_update <= agreed);
     summary.replayed_from = Some(ReplaySource {
         run: source.display().to_string(),
+        recorded_returns,
         recorded_rule,
         recorded_updates: recorded.state.completed,
         agreed,

@@ -308,6 +308,13 @@ fn replaying_a_run_keeps_its_updates_while_the_rules_agree(
     assert_eq!(source["agreed"], 3);
     assert_eq!(source["recorded_updates"], 3);
     assert_eq!(source["recorded_rule"], "last-rollout");
+    let full_returns: Vec<f64> = summary_without_timings(full)["episodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["recorded_return"].as_f64().unwrap())
+        .collect();
+    assert_eq!(source["recorded_returns"], serde_json::json!(full_returns));
     let updates = source["updates"].as_array().unwrap();
     assert_eq!(updates.len(), 2, "updates 2 and 3 choose a model");
     for u in updates {

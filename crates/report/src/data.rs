@@ -126,6 +126,9 @@ pub(crate) struct Summary {
 /// `summary.json`'s `replayed_from`.
 pub(crate) struct ReplaySource {
     pub run: String,
+    /// The recorded run's last return (absent in summaries written before it was kept),
+    /// which matches it to a stored run where the path `run` names nothing.
+    pub recorded_final: Option<f64>,
     pub recorded_rule: String,
     pub recorded_updates: u64,
     pub agreed: u64,
@@ -191,8 +194,8 @@ impl Summary {
         parts.join("; ")
     }
 
-    /// "updates 1–k: the recorded run RUN (rule R, N updates); the rules part at k+1", or
-    /// "–" for a run of its own from the start.
+    /// "updates 1–k: the recorded run RUN (rule R, N updates, final return F); the rules part
+    /// at k+1", or "–" for a run of its own from the start.
     pub fn replayed_text(&self) -> String {
         let Some(r) = &self.replayed_from else {
             return "–".into();
@@ -202,8 +205,11 @@ impl Summary {
         } else {
             "; this run's rule chooses alike on all of them".into()
         };
+        let last = r
+            .recorded_final
+            .map_or_else(String::new, |f| format!(", final return {f:.1}"));
         format!(
-            "updates 1–{}: the recorded run {} (rule {}, {} updates){parting}",
+            "updates 1–{}: the recorded run {} (rule {}, {} updates{last}){parting}",
             r.agreed, r.run, r.recorded_rule, r.recorded_updates
         )
     }

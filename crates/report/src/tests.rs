@@ -517,4 +517,11 @@ fn totals_say_which_updates_a_run_took_from_a_recorded_run() {
     assert_eq!(replay_row(&markdown(tmp.path())), expected);
     assert!(html(tmp.path()).contains("the recorded run runs/shipped (rule last-rollout-states"));
     assert!(html(tmp.path()).contains("parts from it at update 3"));
+    // Its returns name the recorded run where the path does not.
+    edit_json(&tmp.path().join("summary.json"), |v| {
+        v["replayed_from"]["recorded_returns"] = serde_json::json!([64.0, 61.25, 59.94]);
+    });
+    write_report(tmp.path()).unwrap();
+    assert!(replay_row(&markdown(tmp.path()))
+        .starts_with("updates 1–2: the recorded run runs/shipped (rule last-rollout-states, 25 updates, final return 59.9);"));
 }

@@ -48,6 +48,11 @@ pub(super) fn parse_summary(n: Node<'_>) -> Result<Summary, ReportError> {
 fn parse_replay_source(n: Node<'_>) -> Result<ReplaySource, ReportError> {
     Ok(ReplaySource {
         run: n.req("run", |c| c.string())?,
+        recorded_final: n.with("recorded_returns", |c| {
+            c.map(|c| c.f64_vec())
+                .transpose()
+                .map(|r| r.and_then(|r| r.last().copied()))
+        })?,
         recorded_rule: n.req("recorded_rule", |c| c.string())?,
         recorded_updates: n.req_u64("recorded_updates")?,
         agreed: n.req_u64("agreed")?,
