@@ -308,7 +308,8 @@ fn replaying_a_run_keeps_its_updates_while_the_rules_agree(
     assert_eq!(source["agreed"], 3);
     assert_eq!(source["recorded_updates"], 3);
     assert_eq!(source["recorded_rule"], "last-rollout");
-    let full_returns: Vec<f64> = summary_without_timings(full)["episodes"]
+    let full_summary = summary_without_timings(full);
+    let full_returns: Vec<f64> = full_summary["episodes"]
         .as_array()
         .unwrap()
         .iter()
@@ -320,7 +321,7 @@ fn replaying_a_run_keeps_its_updates_while_the_rules_agree(
     for u in updates {
         assert_eq!(u["recorded"], u["other"]);
     }
-    assert_eq!(v, summary_without_timings(full));
+    assert_eq!(v, full_summary);
     for file in ["rollouts.jsonl", "predictions.jsonl", "policies.jsonl"] {
         assert!(read(&full.join(file)) == read(&same.join(file)), "{file}");
     }
