@@ -171,9 +171,11 @@ fn section(
     h.push('\n');
 }
 
-/// SIC's whole-episode mean k_y against the GIC run of the same seed (vil-gic-rbf10 first, then
-/// the other GIC configurations by name), decided only when both runs recorded their gains
-/// and have all their planned updates: a stopped run's last gains are not its final ones.
+/// SIC's whole-episode mean k_y against the GIC run of the same seed, decided only when both
+/// runs recorded their gains and have all their planned updates: a stopped run's last gains are
+/// not its final ones. vil-sic's policy is RBF with N_c = 10, so the GIC run nearest to it in
+/// everything but the controller is taken: vil-gic-rbf10 (or its alias), then vil-gic-rbf25,
+/// then any other GIC configuration by name.
 fn paired_gic_k_y(
     sic: &Summary,
     all: &BTreeMap<String, Vec<RunSummary>>,
@@ -181,9 +183,12 @@ fn paired_gic_k_y(
     let Some(sic_gains) = sic.final_mean_gains else {
         return ("SIC run has no final_mean_gains".into(), None);
     };
-    let preferred = ["vil-gic-rbf10", "vil-gic"];
+    let nearest_first = ["vil-gic-rbf10", "vil-gic", "vil-gic-rbf25"];
     let mut gic_names: Vec<&String> = all.keys().filter(|k| k.starts_with("vil-gic")).collect();
-    gic_names.sort_by_key(|k| (!preferred.contains(&k.as_str()), k.as_str()));
+    gic_names.sort_by_key(|k| {
+        let rank = nearest_first.iter().position(|n| n == k);
+        (rank.unwrap_or(nearest_first.len()), k.as_str())
+    });
     let candidates: Vec<(&String, &Summary, [f64; 2])> = gic_runs(&gic_names, all)
         .filter(|(_, s, _)| s.seed == sic.seed)
         .collect();
@@ -408,6 +413,8 @@ mod tests {
                 130.0,
                 vec![finished(true)],
             ),
+            // Seed 2 also has a linear-policy GIC run: RBF N_c = 25 is nearer to SIC's policy.
+            write_summary(root, "lin-2", "vil-gic-lin", 2, 50.0, vec![finished(true)]),
             // A run from before the claims were recorded.
             write_summary(root, "lin-1", "vil-gic-lin", 1, 50.0, vec![]),
             // Seed 4's GIC run was stopped early: its last gains are not its final ones.
@@ -444,7 +451,7 @@ mod tests {
                 "3 of 5 seeds",
                 "270 vs 200 N/m (vil-gic-rbf10 seed 1) (pass)",
                 "120 vs 130 N/m (vil-gic-rbf25 seed 2) (fail)",
-                "240 N/m; no vil-gic run of seed 3, the 3 complete ones: 130 (vil-gic-rbf25 seed 2) to 300 (vil-gic-rbf25 seed 1) (undecided)",
+                "240 N/m; no vil-gic run of seed 3, the 4 complete ones: 50 (vil-gic-lin seed 2) to 300 (vil-gic-rbf25 seed 1) (undecided)",
                 "240 vs 100 N/m (vil-gic-rbf10 seed 4); GIC run stopped at update 0 (undecided)",
                 "1 of 4",
                 "undecided"
