@@ -10,9 +10,10 @@
 //! ```
 //!
 //! a smooth saturation that reaches ±1 at `x = ±π/2` (the 3rd-order Fourier approximation of
-//! a square wave). It is 2π-periodic, not monotone: a policy whose output moves by more than
-//! π along a roll-out makes its saturated output rise and fall again (the linear VIL policy
-//! does, EXPERIMENTS.md, eleventh session). The moments are exact: `u` is a linear
+//! a square wave). It is 2π-periodic and monotone only between neighbouring extremes (odd
+//! multiples of π/2): a policy whose output moves by more than π along a roll-out can make its
+//! saturated output rise and fall again (the linear VIL policy does, EXPERIMENTS.md, eleventh
+//! session). The moments are exact: `u` is a linear
 //! combination of the 2I sines of `x_{i_j}` and `3 x_{i_j}`, whose means, covariances and
 //! cross-covariances with `x` are given by the identities in the engine
 //! (`E[sin w] = exp(−Var w/2) sin E w`, …). Outputs: `M` (I), `S` (I×I),
