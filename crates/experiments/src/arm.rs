@@ -34,6 +34,8 @@ use vicpilco_pilco::squash::{PartialSat, SatRange};
 const PURPOSE_POLICY_INIT: u64 = 11;
 /// Seed purpose of the final policy's evaluation starts and noise.
 pub const PURPOSE_EVALUATION: u64 = 12;
+/// Seed purpose of the initial scan's jitter, derived from the explore seed.
+const PURPOSE_SCAN_JITTER: u64 = 13;
 
 /// Index of the time entry in the augmented state (x, y, ẋ, ẏ, f_x, f_y, t).
 pub const TIME_INDEX: usize = 6;
@@ -268,6 +270,25 @@ fn explore_policy(cfg: &ArmExperiment, arm: &ArmConfig, ou: OuParams) -> Explore
             let arm = arm.clone();
             // The scan starts where the arm starts (observed at t = 0).
             let path: Mutex<Option<Path>> = Mutex::new(None);
+            // Zero-mean OU offsets of the reference at steps 0..=H (0 at the start), per axis;
+            // the stiffness OU's process with its band centred on 0.
+            let jitter = cfg.initial.scan_jitter.clone().map(|j| {
+                let process = OuParams {
+                    a_min: -3.0 * j.std,
+                    a_max: 3.0 * j.std,
+                    theta: j.theta,
+                    dt,
+                };
+                move |seed: u64| -> [Vec<f64>; 2] {
+                    let mut rng = rand::rngs::ChaCha8Rng::seed_from_u64(derive_seed(
+                        seed,
+                        0,
+                        PURPOSE_SCAN_JITTER,
+                    ));
+                    let x = process.sample(horizon + 1, &mut rng, true);
+                    [x, process.sample(horizon + 1, &mut rng, true)]
+                }
+            });
             Box::new(move |seed, t, obs| {
                 let k = ou.profiles(horizon, seed)[t.min(horizon - 1)];
                 let mut guard = path.lock().unwrap_or_else(|e| e.into_inner());
@@ -276,15 +297,21 @@ fn explore_policy(cfg: &ArmExperiment, arm: &ArmConfig, ou: OuParams) -> Explore
                 }
                 let p = guard.as_ref().expect("set above");
                 let (a, b) = (p(t as f64 * dt), p((t + 1) as f64 * dt));
+                let offsets = jitter.as_ref().map(|j| j(seed));
+                let offset = |i: usize, step: usize| {
+                    offsets.as_ref().map_or(0.0, |o| o[i][step.min(horizon)])
+                };
                 // A reference restarted at the measured position each step aims at the path's
                 // next point from there; one integrated from the start follows the path's
                 // increments.
                 let from = match v.reference {
-                    ReferenceOrigin::Start => [a.x[0], a.x[1]],
+                    ReferenceOrigin::Start => [a.x[0] + offset(0, t), a.x[1] + offset(1, t)],
                     ReferenceOrigin::Measured => [obs[0], obs[1]],
                 };
-                let delta =
-                    |i: usize| ((b.x[i] - from[i]) / ticks_per_step).clamp(-delta_max, delta_max);
+                let delta = |i: usize| {
+                    ((b.x[i] + offset(i, t + 1) - from[i]) / ticks_per_step)
+                        .clamp(-delta_max, delta_max)
+                };
                 vec![k[0], k[1], delta(0), delta(1)]
             })
         }
@@ -437,6 +464,48 @@ mod tests {
             (x - 0.75).abs() < 1e-12 && (y - 0.30).abs() < 1e-12,
             "({x}, {y})"
         );
+    }
+
+    /// With `initial.scan_jitter` the integrated reference leaves the scan by a seeded offset
+    /// bounded by 3 std (the clip), and without it follows the scan exactly.
+    #[test]
+    fn scan_jitter_moves_the_reference_off_the_scan_within_three_std() {
+        let plain = cfg("vilta");
+        let mut c = plain.clone();
+        let std = 0.02;
+        c.initial.scan_jitter = Some(crate::config::ScanJitter { std, theta: 2.0 });
+        c.validate("test").unwrap();
+        let arm = arm_config(&c);
+        let ticks = c.dt / c.vilta.as_ref().unwrap().delta_tick;
+        let start = [0.5, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let references = |c: &ArmExperiment, seed: u64| {
+            let explore = explore_policy(c, &arm, OuParams::default());
+            let (mut x, mut y) = (start[0], start[1]);
+            let mut out = vec![];
+            for t in 0..c.horizon {
+                let a = explore(seed, t, &start);
+                for d in &a[2..] {
+                    assert!(d.abs() <= c.policy.delta_max.unwrap(), "step {t}: {d}");
+                }
+                x += a[2] * ticks;
+                y += a[3] * ticks;
+                out.push([x, y]);
+            }
+            out
+        };
+        let scan = references(&plain, 7);
+        let jittered = references(&c, 7);
+        let mut largest = 0.0_f64;
+        for (s, j) in scan.iter().zip(&jittered) {
+            for i in 0..2 {
+                let off = (j[i] - s[i]).abs();
+                assert!(off <= 3.0 * std + 1e-12, "offset {off}");
+                largest = largest.max(off);
+            }
+        }
+        assert!(largest > 0.5 * std, "largest offset {largest}");
+        assert_eq!(jittered, references(&c, 7));
+        assert_ne!(jittered, references(&c, 8));
     }
 
     #[test]

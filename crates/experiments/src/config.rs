@@ -251,6 +251,22 @@ pub struct InitialConfig {
     /// VILTA: the scan's via points (t, x, y), min-jerk between them, sent as per-tick Δ.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scan: Option<Vec<[f64; 3]>>,
+    /// VILTA (ours, off unless set): jitter added to the scan's reference position.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scan_jitter: Option<ScanJitter>,
+}
+
+/// A zero-mean Ornstein–Uhlenbeck perturbation of the scan's reference position, one per axis,
+/// clipped to ±3 std. Without it the scan's increments are a function of the state along its
+/// path, and the first dynamics model cannot tell what the Δ actions do (EXPERIMENTS.md,
+/// fifteenth session).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScanJitter {
+    /// Stationary standard deviation per axis (m).
+    pub std: f64,
+    /// Mean-reversion rate θ (1/s); the increments' correlation time is about 1/θ.
+    pub theta: f64,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -486,6 +502,11 @@ impl ArmExperiment {
                 c.forbid("vilta", &self.vilta, "to a VIL run")?;
                 c.forbid("policy.delta_max", &p.delta_max, "to a VIL run")?;
                 c.forbid("initial.scan", &self.initial.scan, "to a VIL run")?;
+                c.forbid(
+                    "initial.scan_jitter",
+                    &self.initial.scan_jitter,
+                    "to a VIL run",
+                )?;
             }
             Task::Vilta => {
                 c.require("vilta", &self.vilta, "for a VILTA run")?;
@@ -507,6 +528,10 @@ impl ArmExperiment {
                             format!("times must increase: entry {} at t = {}", i + 1, w[1][0]),
                         ));
                     }
+                }
+                if let Some(j) = &self.initial.scan_jitter {
+                    c.positive("initial.scan_jitter.std", j.std)?;
+                    c.positive("initial.scan_jitter.theta", j.theta)?;
                 }
                 if let Some(v) = &self.vilta {
                     c.finite("vilta.geometry_shift_x", v.geometry_shift_x)?;
@@ -567,6 +592,9 @@ impl ArmExperiment {
             keys.extend(["episodes", "start.state", "initial.scan"]);
             if self.start.prediction_y.is_some() {
                 keys.push("start.prediction_y");
+            }
+            if self.initial.scan_jitter.is_some() {
+                keys.push("initial.scan_jitter");
             }
         }
         keys

@@ -341,3 +341,32 @@ fn every_arm_run_selects_its_model_on_the_last_roll_out_and_says_it_is_ours() {
         "{err}"
     );
 }
+
+#[test]
+fn scan_jitter_is_a_positive_vilta_only_option() {
+    let text = config::shipped("vilta").unwrap().1;
+    assert_eq!(shipped("vilta").initial.scan_jitter, None);
+    let anchor = "ou_theta = 0.5";
+    assert!(text.contains(anchor));
+    let with = |table: &str| text.replace(anchor, &format!("{anchor}\n{table}"));
+    let cfg = config::parse(
+        &with("scan_jitter = { std = 0.02, theta = 2.0 }"),
+        "test.toml",
+    )
+    .unwrap();
+    let j = cfg.initial.scan_jitter.as_ref().unwrap();
+    assert_eq!((j.std, j.theta), (0.02, 2.0));
+    assert!(cfg.ours_keys().contains(&"initial.scan_jitter"));
+    let e = error_of(&with("scan_jitter = { std = 0.0, theta = 2.0 }"));
+    assert!(e.contains("initial.scan_jitter.std"), "{e}");
+    let e = error_of(&with("scan_jitter = { std = 0.02, theta = -1.0 }"));
+    assert!(e.contains("initial.scan_jitter.theta"), "{e}");
+    let e = error_of(&with("scan_jitter = { std = 0.02, theta = 2.0, sd = 1 }"));
+    assert!(e.contains("sd"), "{e}");
+    let vil = config::shipped("vil-gic").unwrap().1;
+    let e = error_of(&vil.replace(
+        anchor,
+        &format!("{anchor}\nscan_jitter = {{ std = 0.02, theta = 2.0 }}"),
+    ));
+    assert!(e.contains("initial.scan_jitter"), "{e}");
+}
