@@ -172,15 +172,21 @@ fn problem(cfg: &ArmExperiment, arm: &ArmConfig) -> Result<Problem, ExperimentEr
         .map(|d| usize::from(d == "y"))
         .collect();
     let pos_w = 1.0 / (c.position_width * c.position_width);
-    let f_w = 1.0 / (c.force_width * c.force_width);
-    let costs = vec![
+    let force_cost = |width: f64| {
+        let w = 1.0 / (width * width);
+        SaturatingCost::new(&[4, 5], diag(&[w, w]).as_ref(), &[0.0, 0.0])
+    };
+    let mut costs = vec![
         SaturatingCost::new(
             &pos_dims,
             diag(&vec![pos_w; pos_dims.len()]).as_ref(),
             &c.position_target,
         )?,
-        SaturatingCost::new(&[4, 5], diag(&[f_w, f_w]).as_ref(), &[0.0, 0.0])?,
+        force_cost(c.force_width)?,
     ];
+    if let Some(far) = c.force_width_far {
+        costs.push(force_cost(far)?);
+    }
     let k_range = SatRange::Bounded {
         a_min: cfg.policy.k_min,
         a_max: cfg.policy.k_max,
@@ -506,6 +512,30 @@ mod tests {
         assert!(largest > 0.5 * std, "largest offset {largest}");
         assert_eq!(jittered, references(&c, 7));
         assert_ne!(jittered, references(&c, 8));
+    }
+
+    /// `cost.force_width_far` adds `1 − exp(−½|f|²/w²)` to the immediate cost, and leaves the
+    /// rest of the cost as it was.
+    #[test]
+    fn force_width_far_adds_a_wide_saturating_force_cost() {
+        let plain = cfg("vilta");
+        let mut c = plain.clone();
+        let far = 250.0;
+        c.cost.force_width_far = Some(far);
+        c.validate("test").unwrap();
+        let cost = |c: &ArmExperiment, x: &[f64]| {
+            let p = problem(c, &arm_config(c)).unwrap();
+            p.ret.state_cost.unwrap().eval(x)
+        };
+        for f in [[0.0, 0.0], [9.0, 0.0], [178.0, -40.0], [1500.0, 0.0]] {
+            let x = [0.77, 0.2, 0.0, 0.0, f[0], f[1]];
+            let added = 1.0 - (-0.5 * (f[0] * f[0] + f[1] * f[1]) / (far * far)).exp();
+            let diff = cost(&c, &x) - cost(&plain, &x);
+            assert!(
+                (diff - added).abs() < 1e-12,
+                "f = {f:?}: {diff} against {added}"
+            );
+        }
     }
 
     #[test]

@@ -141,6 +141,12 @@ pub struct CostConfig {
     /// Width of the position cost (m) and of the force cost on (f_x, f_y) (N).
     pub position_width: f64,
     pub force_width: f64,
+    /// Ours, off unless set: the width (N) of a second saturating cost on (f_x, f_y), target 0,
+    /// wider than `force_width`. The thesis's 20 N cost is flat at 1 beyond about 60 N, so a
+    /// policy that presses a wall with 150 N or crashes into it with 500 N gets no gradient
+    /// towards pressing less (EXPERIMENTS.md, sixteenth session).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force_width_far: Option<f64>,
     /// w2: weight of std of the summed saturating costs (negative: exploration).
     pub w_std: f64,
     /// w3: weight of the energy cost of (k_x, k_y), S = diag(k_max²).
@@ -435,6 +441,18 @@ impl ArmExperiment {
         }
         c.positive("cost.position_width", cost.position_width)?;
         c.positive("cost.force_width", cost.force_width)?;
+        if let Some(far) = cost.force_width_far {
+            c.positive("cost.force_width_far", far)?;
+            if far <= cost.force_width {
+                return Err(c.fail(
+                    "cost.force_width_far",
+                    format!(
+                        "must exceed cost.force_width ({}), got {far}",
+                        cost.force_width
+                    ),
+                ));
+            }
+        }
         c.finite("cost.w_std", cost.w_std)?;
         if !(cost.w_energy.is_finite() && cost.w_energy >= 0.0) {
             return Err(c.fail(
@@ -587,6 +605,9 @@ impl ArmExperiment {
         }
         if self.controller == ControllerKind::Sic && self.policy.kind == PolicyKind::Rbf {
             keys.push("policy.n_basis");
+        }
+        if self.cost.force_width_far.is_some() {
+            keys.push("cost.force_width_far");
         }
         if self.task == Task::Vilta {
             keys.extend(["episodes", "start.state", "initial.scan"]);

@@ -370,3 +370,19 @@ fn scan_jitter_is_a_positive_vilta_only_option() {
     ));
     assert!(e.contains("initial.scan_jitter"), "{e}");
 }
+
+#[test]
+fn force_width_far_is_an_optional_width_wider_than_force_width() {
+    let text = config::shipped("vilta").unwrap().1;
+    assert_eq!(shipped("vilta").cost.force_width_far, None);
+    let anchor = "force_width = 20.0";
+    assert!(text.contains(anchor));
+    let with = |line: &str| text.replace(anchor, &format!("{anchor}\n{line}"));
+    let cfg = config::parse(&with("force_width_far = 250.0"), "test.toml").unwrap();
+    assert_eq!(cfg.cost.force_width_far, Some(250.0));
+    assert!(cfg.ours_keys().contains(&"cost.force_width_far"));
+    for bad in ["force_width_far = 0.0", "force_width_far = 10.0"] {
+        let e = error_of(&with(bad));
+        assert!(e.contains("cost.force_width_far"), "{bad}: {e}");
+    }
+}
