@@ -110,6 +110,10 @@ fn divergence_reports_time() {
             EnvError::Diverged { t, detail } => {
                 eprintln!("(k) k = {k:e}: {err}");
                 assert!(*t > 0.0 && *t < 10.0 && !detail.is_empty());
+                assert!(
+                    detail.contains("reference at (") && detail.contains("gains ("),
+                    "{detail}"
+                );
             }
             other => panic!("expected divergence, got {other}"),
         }

@@ -284,6 +284,13 @@ impl ArmSim {
         self.tick += 1;
         let t_end = self.t();
         if let Some(detail) = self.divergence() {
+            // Where the arm was sent, and how stiffly, is what tells a runaway learned policy
+            // from an integrator that cannot hold the contact.
+            let tcp = self.plant.tcp(&self.state);
+            let detail = format!(
+                "{detail} (TCP at ({:.4}, {:.4}) m, reference at ({:.4}, {:.4}) m, gains ({:.1}, {:.1}) N/m)",
+                tcp.x[0], tcp.x[1], refp.x[0], refp.x[1], k_xy[0], k_xy[1]
+            );
             return Err(EnvError::Diverged { t: t_end, detail });
         }
         self.reading = self.read();
