@@ -120,6 +120,13 @@ fn vilta_configs_match_the_thesis_tables() {
     assert_eq!(var.episodes, 15);
 }
 
+/// A shipped config's text with `line` begun on a new line right after `anchor` (a comment
+/// that followed `anchor` on its line then follows `line`).
+fn with_line_after(text: &str, anchor: &str, line: &str) -> String {
+    assert!(text.contains(anchor), "no {anchor:?} in the config");
+    text.replace(anchor, &format!("{anchor}\n{line}"))
+}
+
 fn error_of(text: &str) -> String {
     config::parse(text, "test.toml").unwrap_err().to_string()
 }
@@ -347,8 +354,7 @@ fn scan_jitter_is_a_positive_vilta_only_option() {
     let text = config::shipped("vilta").unwrap().1;
     assert_eq!(shipped("vilta").initial.scan_jitter, None);
     let anchor = "ou_theta = 0.5";
-    assert!(text.contains(anchor));
-    let with = |table: &str| text.replace(anchor, &format!("{anchor}\n{table}"));
+    let with = |table: &str| with_line_after(text, anchor, table);
     let cfg = config::parse(
         &with("scan_jitter = { std = 0.02, theta = 2.0 }"),
         "test.toml",
@@ -364,9 +370,10 @@ fn scan_jitter_is_a_positive_vilta_only_option() {
     let e = error_of(&with("scan_jitter = { std = 0.02, theta = 2.0, sd = 1 }"));
     assert!(e.contains("sd"), "{e}");
     let vil = config::shipped("vil-gic").unwrap().1;
-    let e = error_of(&vil.replace(
+    let e = error_of(&with_line_after(
+        vil,
         anchor,
-        &format!("{anchor}\nscan_jitter = {{ std = 0.02, theta = 2.0 }}"),
+        "scan_jitter = { std = 0.02, theta = 2.0 }",
     ));
     assert!(e.contains("initial.scan_jitter"), "{e}");
 }
@@ -375,9 +382,7 @@ fn scan_jitter_is_a_positive_vilta_only_option() {
 fn force_width_far_is_an_optional_width_wider_than_force_width() {
     let text = config::shipped("vilta").unwrap().1;
     assert_eq!(shipped("vilta").cost.force_width_far, None);
-    let anchor = "force_width = 20.0";
-    assert!(text.contains(anchor));
-    let with = |line: &str| text.replace(anchor, &format!("{anchor}\n{line}"));
+    let with = |line: &str| with_line_after(text, "force_width = 20.0", line);
     let cfg = config::parse(&with("force_width_far = 250.0"), "test.toml").unwrap();
     assert_eq!(cfg.cost.force_width_far, Some(250.0));
     assert!(cfg.ours_keys().contains(&"cost.force_width_far"));
