@@ -144,7 +144,8 @@ pub struct CostConfig {
     /// Ours, off unless set: the width (N) of a second saturating cost on (f_x, f_y), target 0,
     /// wider than `force_width`. The thesis's 20 N cost is flat at 1 beyond about 60 N, so a
     /// policy that presses a wall with 150 N or crashes into it with 500 N gets no gradient
-    /// towards pressing less (EXPERIMENTS.md, sixteenth session).
+    /// towards pressing less (EXPERIMENTS.md, sixteenth session). Like the other saturating
+    /// costs it also enters the summed cost whose std `w_std` weighs.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub force_width_far: Option<f64>,
     /// w2: weight of std of the summed saturating costs (negative: exploration).
