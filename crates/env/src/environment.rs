@@ -66,4 +66,9 @@ pub struct StepInfo {
     pub flags: BTreeMap<String, bool>,
     /// Other named scalars (for the arm: joint angles, largest force during the step, …).
     pub values: BTreeMap<String, f64>,
+    /// Why the system ended the episode during this step, before the step's full `dt` (for
+    /// the arm: a singular Jacobian, a runaway joint). `None` for a whole step. Such a step's
+    /// transition spans less than `dt`, so a learner must not fit its dynamics to it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped_early: Option<String>,
 }

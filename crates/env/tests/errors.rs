@@ -1,7 +1,9 @@
 //! Check (k), library part: every kind of bad input of issue 5 row 9 is an error naming the
 //! field (or the time, for divergence), never a panic and never silently clipped.
 
-use vicpilco_env::arm::{ActionMode, ArmConfig, ArmEnv, ControllerKind, ReferenceSpec};
+use vicpilco_env::arm::{
+    ActionMode, ArmConfig, ArmEnv, ControllerKind, OnDivergence, ReferenceOrigin, ReferenceSpec,
+};
 use vicpilco_env::{EnvError, Environment};
 
 const START: [f64; 6] = [0.5, 0.0, 0.0, 0.0, 0.0, 0.0];
@@ -102,7 +104,10 @@ fn start_out_of_reach() {
 fn divergence_reports_time() {
     // A stiffness far beyond what a 1 kHz loop can hold makes the closed loop unstable.
     for k in [1e9, f64::MAX] {
-        let mut e = env(ArmConfig::default());
+        let mut e = env(ArmConfig {
+            on_divergence: OnDivergence::Error,
+            ..ArmConfig::default()
+        });
         let err = (0..100)
             .find_map(|_| e.step(&[k, k]).err())
             .expect("must diverge");
@@ -119,6 +124,74 @@ fn divergence_reports_time() {
         }
         assert!(err.to_string().starts_with("simulation diverged at t = "));
     }
+}
+
+/// By default a runaway ends the episode instead of the run: the step reports the last sound
+/// state (finite, joints within `max_joint_speed`), flags `diverged`, names what ran away, and
+/// the episode is over.
+#[test]
+fn divergence_ends_the_episode_at_the_last_sound_state() {
+    for k in [1e9, f64::MAX] {
+        let cfg = ArmConfig::default();
+        let mut e = env(cfg.clone());
+        let mut steps = Vec::new();
+        while steps.last().is_none_or(|s: &vicpilco_env::Step| !s.done) {
+            steps.push(e.step(&[k, k]).expect("a runaway is not an error"));
+        }
+        let last = steps.last().unwrap();
+        assert!(steps.len() < cfg.horizon, "k = {k:e} never diverged");
+        assert!(last.info.flags["diverged"]);
+        assert!(!last.info.flags["singular"]);
+        let why = last.info.stopped_early.as_deref().expect("a reason");
+        assert!(why.starts_with("simulation diverged at t = "), "{why}");
+        assert!(why.contains("exceeds max_joint_speed") || why.contains("not finite"));
+        // Whole steps before it have no reason and no flag.
+        for s in &steps[..steps.len() - 1] {
+            assert!(s.info.stopped_early.is_none() && !s.info.flags["diverged"]);
+        }
+        // The state reported is the one before the runaway tick.
+        let sim = e.sim().unwrap();
+        let qd = &sim.state()[3..];
+        assert!(sim.state().iter().all(|v| v.is_finite()));
+        assert!(qd.iter().all(|v| v.abs() <= cfg.max_joint_speed), "{qd:?}");
+        assert!(last.observation.iter().all(|v| v.is_finite()));
+        assert!(last.info.true_state.iter().all(|v| v.is_finite()));
+        assert_eq!(last.info.t, sim.t());
+        assert!(last.info.t < steps.len() as f64 * cfg.step_dt);
+        assert!(matches!(
+            e.step(&[100.0, 100.0]).unwrap_err(),
+            EnvError::EpisodeOver { .. }
+        ));
+    }
+}
+
+/// What stopped vilta-var seed 2: VILTA increments that drive the integrated reference out of
+/// the arm's reach. The episode ends (runaway or singular Jacobian), never the run.
+#[test]
+fn a_vilta_reference_driven_out_of_reach_ends_the_episode() {
+    let cfg = ArmConfig {
+        mode: ActionMode::Vilta {
+            delta_max: 0.0025,
+            delta_tick: 0.005,
+            origin: ReferenceOrigin::Start,
+        },
+        ..ArmConfig::default()
+    };
+    let mut e = env(cfg.clone());
+    let mut last = None;
+    for _ in 0..cfg.horizon {
+        let s = e.step(&[127.5, 127.5, 0.0, -0.0025]).expect("not an error");
+        let done = s.done;
+        last = Some(s);
+        if done {
+            break;
+        }
+    }
+    let last = last.unwrap();
+    let why = last.info.stopped_early.as_deref().expect("ended early");
+    eprintln!("ended at t = {:.3} s: {why}", last.info.t);
+    assert!(last.info.flags["diverged"] || last.info.flags["singular"]);
+    assert!(last.info.t < cfg.horizon as f64 * cfg.step_dt);
 }
 
 #[test]

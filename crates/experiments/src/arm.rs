@@ -365,12 +365,13 @@ pub fn linear_policy(cfg: &ArmExperiment, seed: u64) -> Result<LinearPolicy, Exp
 
 /// Whether the peg ended fully inserted at the end of the episode (the simulator's
 /// `inserted` flag after the last step: in the hole within the insertion tolerance of the end
-/// wall). An episode the simulator stopped early (singular Jacobian) never succeeds.
+/// wall). An episode the simulator stopped early (singular Jacobian, runaway joint) never
+/// succeeds.
 pub fn inserted(r: &Rollout) -> bool {
     let stopped_early = r
         .infos
         .iter()
-        .any(|i| i.flags.get("singular") == Some(&true));
+        .any(|i| i.stopped_early.is_some() || i.flags.get("singular") == Some(&true));
     !stopped_early
         && r.infos
             .last()
@@ -583,6 +584,9 @@ mod tests {
             info(false, true),
             info(true, false)
         ])));
+        let mut runaway = info(true, false);
+        runaway.stopped_early = Some("simulation diverged".into());
+        assert!(!inserted(&rollout(vec![info(false, false), runaway])));
         assert!(!inserted(&rollout(vec![])));
     }
 }

@@ -44,7 +44,8 @@ pub fn augment(spec: &StepSpec, trig: Option<&TrigAug>, x: &[f64], t: usize) -> 
 }
 
 /// GP training inputs `[aug(x_t)[dyn_inputs]; u_t]` and targets (`x_{t+1} − x_t` for relative
-/// dimensions, `x_{t+1}` for absolute ones, each minus the prior mean shift `r_k(t)`).
+/// dimensions, `x_{t+1}` for absolute ones, each minus the prior mean shift `r_k(t)`), from
+/// every whole step (a step the system ended early is left out).
 pub fn training_set(
     spec: &StepSpec,
     rollouts: &[Rollout],
@@ -58,6 +59,10 @@ pub fn training_set(
     let mut ys: Vec<Vec<f64>> = Vec::new();
     for r in rollouts.iter().filter(|r| r.used_for_training) {
         for t in 0..r.len() {
+            // A step the system cut short spans less than dt: not a sample of the dynamics.
+            if r.infos.get(t).is_some_and(|i| i.stopped_early.is_some()) {
+                continue;
+            }
             let aug = augment(spec, trig.as_ref(), &r.observations[t], t);
             let mut input: Vec<f64> = spec.dyn_inputs.iter().map(|&i| aug[i]).collect();
             input.extend_from_slice(&r.actions[t]);

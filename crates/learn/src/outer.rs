@@ -278,8 +278,19 @@ where
 
     /// The weighted immediate cost `w1 c(x_{t+1}) + w3 c_a(a_t)` of each step of a recorded
     /// roll-out (true states), undiscounted: what the prediction's
-    /// [`crate::value::PredictedStep`] means are compared with.
+    /// [`crate::value::PredictedStep`] means are compared with. Always H entries: a roll-out
+    /// the system ended early (a singular or runaway arm) pays its last step's cost for every
+    /// step it did not run, as if it had stayed where it stopped, so a crash never records a
+    /// cheaper return than running on would have.
     pub fn recorded_costs(&self, r: &Rollout) -> Vec<f64> {
+        let mut costs = self.run_costs(r);
+        if let Some(&last) = costs.last() {
+            costs.resize(costs.len().max(self.ret.horizon), last);
+        }
+        costs
+    }
+
+    fn run_costs(&self, r: &Rollout) -> Vec<f64> {
         let trig = (!self.ret.cost_angles.is_empty()).then(|| {
             TrigAug::new(
                 self.spec.state_dim,

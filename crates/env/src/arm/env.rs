@@ -2,7 +2,7 @@
 //! Δy_ref)), observation s = (x, y, ẋ, ẏ, f_x, f_y) from the noisy readings.
 
 use super::kinematics::ik;
-use super::params::{ActionMode, ArmConfig, ReferenceOrigin};
+use super::params::{ActionMode, ArmConfig, OnDivergence, ReferenceOrigin};
 use super::plan::RefPoint;
 use super::sensors::Reading;
 use super::sim::{ArmSim, TickStatus};
@@ -229,6 +229,8 @@ impl Environment for ArmEnv {
         }
         let ticks = self.cfg.ticks_per_step();
         let mut singular = false;
+        let mut diverged = false;
+        let mut stopped_early = None;
         let mut max_f: f64 = 0.0;
         for _ in 0..ticks {
             let sim = self.sim.as_ref().expect("checked above");
@@ -236,12 +238,24 @@ impl Environment for ArmEnv {
             let dt = sim.tick_dt();
             let refp = self.reference_at(t);
             let sim = self.sim.as_mut().expect("checked above");
-            match sim.tick(k, &refp)? {
-                TickStatus::Ok => {}
-                TickStatus::Singular => {
+            match sim.tick(k, &refp) {
+                Ok(TickStatus::Ok) => {}
+                Ok(TickStatus::Singular) => {
                     singular = true;
+                    stopped_early = Some(format!(
+                        "singular Jacobian at t = {t:.4} s: |det J| below singular_det = {}",
+                        self.cfg.singular_det
+                    ));
                     break;
                 }
+                Err(e @ EnvError::Diverged { .. })
+                    if self.cfg.on_divergence == OnDivergence::EndEpisode =>
+                {
+                    diverged = true;
+                    stopped_early = Some(e.to_string());
+                    break;
+                }
+                Err(e) => return Err(e),
             }
             let w = sim.contact().w;
             max_f = max_f.max(w[0].hypot(w[1]));
@@ -252,7 +266,7 @@ impl Environment for ArmEnv {
             }
         }
         self.steps += 1;
-        self.done = singular || self.steps >= self.cfg.horizon;
+        self.done = stopped_early.is_some() || self.steps >= self.cfg.horizon;
         let sim = self.sim.as_ref().expect("checked above");
         let r = *sim.reading();
         let t = sim.t();
@@ -268,6 +282,7 @@ impl Environment for ArmEnv {
         flags.insert("spring".to_string(), c.spring);
         flags.insert("in_hole".to_string(), sim.in_hole());
         flags.insert("singular".to_string(), singular);
+        flags.insert("diverged".to_string(), diverged);
         flags.insert("inserted".to_string(), self.inserted());
         let mut values = BTreeMap::new();
         for i in 0..3 {
@@ -284,6 +299,7 @@ impl Environment for ArmEnv {
                 reference: Some(vec![refp.x[0], refp.x[1], refp.xd[0], refp.xd[1]]),
                 flags,
                 values,
+                stopped_early,
             },
             done: self.done,
         })

@@ -36,7 +36,7 @@ pub use env::{ArmEnv, START_MAX_PENETRATION, STATE_NAMES};
 pub use ou::OuParams;
 pub use params::{
     ActionMode, ArmConfig, ArmParams, ContactParams, ControllerKind, Geometry, ImpedanceParams,
-    ReferenceOrigin, SensorParams,
+    OnDivergence, ReferenceOrigin, SensorParams,
 };
 pub use plan::{RefPoint, ReferenceSpec, ViaPlan};
 pub use sim::{ArmSim, Plant, TickStatus};

@@ -289,6 +289,19 @@ pub enum ActionMode {
     },
 }
 
+/// What the environment does when a control tick diverges (a non-finite state, or a joint
+/// faster than `max_joint_speed`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OnDivergence {
+    /// End the episode at the last state before the runaway tick, with flag `diverged` and
+    /// the step's [`crate::StepInfo::stopped_early`] naming what ran away.
+    #[default]
+    EndEpisode,
+    /// Return [`EnvError::Diverged`] from `step` (for checking integrator settings).
+    Error,
+}
+
 /// Where VILTA's reference position x_v comes from.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -360,6 +373,11 @@ pub struct ArmConfig {
     pub singular_det: f64,
     /// Any joint speed above this (rad/s) is reported as divergence. **Ours**: 100.
     pub max_joint_speed: f64,
+    /// What [`super::ArmEnv::step`] does when the simulation diverges. **Ours**: end the
+    /// episode, as a real arm stops at its limits, so a learned policy that drives the arm
+    /// into a runaway still leaves its roll-out's data behind.
+    #[serde(default)]
+    pub on_divergence: OnDivergence,
     /// Insertion counts when the TCP ends within this distance of the end wall while in the
     /// hole (m). **Ours**: 0.005 (x ≥ 0.745).
     pub insert_tolerance: f64,
@@ -386,6 +404,7 @@ impl Default for ArmConfig {
             reference: ReferenceSpec::thesis(),
             singular_det: 1e-4,
             max_joint_speed: 100.0,
+            on_divergence: OnDivergence::EndEpisode,
             insert_tolerance: 0.005,
             record_trace: false,
         }

@@ -244,6 +244,8 @@ impl ArmSim {
 
     /// One control tick: gains from (k_x, k_y) and the true contact state, torque from the
     /// current reading and `refp`, torque held over the RK4 substeps, then a fresh reading.
+    /// A tick that diverges returns [`EnvError::Diverged`] and leaves the simulator as it was
+    /// before the tick.
     pub fn tick(&mut self, k_xy: [f64; 2], refp: &RefPoint) -> Result<TickStatus, EnvError> {
         let t = self.t();
         let c = self.plant.contact_at(&self.state, self.latch);
@@ -274,6 +276,7 @@ impl ArmSim {
                 contact: c,
             });
         }
+        let before = (self.state, self.latch);
         self.plant.integrate(
             &mut self.state,
             &mut self.latch,
@@ -281,8 +284,6 @@ impl ArmSim {
             self.h,
             self.substeps,
         );
-        self.tick += 1;
-        let t_end = self.t();
         if let Some(detail) = self.divergence() {
             // Where the arm was sent, and how stiffly, is what tells a runaway learned policy
             // from an integrator that cannot hold the contact.
@@ -291,8 +292,15 @@ impl ArmSim {
                 "{detail} (TCP at ({:.4}, {:.4}) m, reference at ({:.4}, {:.4}) m, gains ({:.1}, {:.1}) N/m)",
                 tcp.x[0], tcp.x[1], refp.x[0], refp.x[1], k_xy[0], k_xy[1]
             );
-            return Err(EnvError::Diverged { t: t_end, detail });
+            // The simulator stays at the last sound state (time, state, latch and reading of
+            // this tick's start), so a caller that ends the episode here reports that state.
+            (self.state, self.latch) = before;
+            return Err(EnvError::Diverged {
+                t: (self.tick + 1) as f64 * self.tick_dt,
+                detail,
+            });
         }
+        self.tick += 1;
         self.reading = self.read();
         Ok(TickStatus::Ok)
     }

@@ -592,6 +592,7 @@ impl<P: ClassicSystem + Dynamics<N>, const N: usize> Environment for ClassicEnv<
                 reference: None,
                 flags: BTreeMap::new(),
                 values,
+                stopped_early: None,
             },
             done: e.steps == s.horizon,
         })
