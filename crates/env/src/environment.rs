@@ -45,8 +45,9 @@ pub struct Step {
     pub observation: Vec<f64>,
     /// Diagnostics the learner must not use as observations.
     pub info: StepInfo,
-    /// True when the episode is over: the horizon is reached, or the system stopped it (see
-    /// `info.flags`, e.g. `singular`). Call `reset` before stepping again.
+    /// True when the episode is over: the horizon is reached, or the system stopped it
+    /// (`info.stopped_early` says why; for the arm also `info.flags`, e.g. `singular`,
+    /// `diverged`). Call `reset` before stepping again.
     pub done: bool,
 }
 

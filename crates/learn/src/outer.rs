@@ -189,7 +189,8 @@ const PURPOSE_EXPLORE: u64 = 3;
 /// Roll-out j ≥ 1 of an update uses purpose `PURPOSE_EXTRA_ROLLOUT + j` for its sub-seed.
 const PURPOSE_EXTRA_ROLLOUT: u64 = 100;
 
-/// Run one episode on the system with `act(t, observation) → action`.
+/// Run one episode on the system with `act(t, observation) → action`, until the horizon or
+/// until the system ends it (logged as a warning with the system's reason).
 pub fn rollout(
     env: &mut dyn Environment,
     start: &[f64],
@@ -218,6 +219,13 @@ pub fn rollout(
         if step.done {
             break;
         }
+    }
+    if let Some(why) = r.infos.last().and_then(|i| i.stopped_early.as_deref()) {
+        tracing::warn!(
+            steps = r.len(),
+            horizon = env.horizon(),
+            "the system ended the roll-out early; the steps it did not run pay its last cost: {why}"
+        );
     }
     Ok(r)
 }
