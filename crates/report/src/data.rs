@@ -231,6 +231,9 @@ pub(crate) struct Rollout {
     pub costs: Option<Vec<f64>>,
     pub actions: Rows,
     pub true_states: Rows,
+    /// Why the system ended the roll-out before the horizon (its last step's
+    /// `stopped_early`), if it did.
+    pub stopped_early: Option<String>,
 }
 
 impl Rollout {
@@ -317,6 +320,29 @@ impl Run {
             final_eval,
             notes,
         })
+    }
+
+    /// Every roll-out the system ended before the horizon, as "update k, roll-out j: why"
+    /// (update 0 is the initial roll-outs); "none", or "–" without rollouts.jsonl.
+    pub fn ended_early_text(&self) -> String {
+        let Some(rollouts) = &self.rollouts else {
+            return "–".into();
+        };
+        let mut seen: Vec<u64> = Vec::new();
+        let ended: Vec<String> = rollouts
+            .iter()
+            .filter_map(|r| {
+                seen.push(r.episode);
+                let j = seen.iter().filter(|&&e| e == r.episode).count();
+                let why = r.stopped_early.as_ref()?;
+                Some(format!("update {}, roll-out {j}: {why}", r.episode))
+            })
+            .collect();
+        if ended.is_empty() {
+            "none".into()
+        } else {
+            ended.join("; ")
+        }
     }
 
     /// The first roll-out recorded after `episode` updates (the one summary.json describes).
@@ -434,11 +460,21 @@ fn parse_trajectory(r: Node<'_>) -> Result<(Rows, Rows), ReportError> {
 
 fn parse_rollout_line(n: Node<'_>) -> Result<Rollout, ReportError> {
     let (actions, true_states) = n.req("rollout", parse_trajectory)?;
+    let stopped_early = n.req("rollout", |r| {
+        r.with("infos", |infos| match infos {
+            None => Ok(None),
+            Some(infos) => Ok(infos
+                .map_array(|i| i.opt_string("stopped_early"))?
+                .pop()
+                .flatten()),
+        })
+    })?;
     Ok(Rollout {
         episode: n.req_u64("episode")?,
         costs: n.with("costs", |c| c.map(|c| c.f64_vec()).transpose())?,
         actions,
         true_states,
+        stopped_early,
     })
 }
 
@@ -466,6 +502,7 @@ fn read_old_rollouts(
                         costs: None,
                         actions,
                         true_states,
+                        stopped_early: None,
                     })
                 })
             }

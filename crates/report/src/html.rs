@@ -281,6 +281,7 @@ fn totals(h: &mut String, run: &Run) {
         ("solved at", s.solved_text()),
         ("code (commit, subnormals) per update", s.sessions_text()),
         ("updates from a recorded run", s.replayed_text()),
+        ("roll-outs the system ended early", run.ended_early_text()),
     ] {
         let _ = writeln!(h, "<tr><th>{k}</th><td class=\"num\">{}</td></tr>", esc(&v));
     }

@@ -182,6 +182,10 @@ fn totals(h: &mut String, run: &Run) {
         ("wall time (s)", num(s.wall_s, 0)),
         ("code (commit, subnormals) per update", s.sessions_text()),
         ("updates from a recorded run", s.replayed_text()),
+        (
+            "roll-outs the system ended early",
+            cell(&run.ended_early_text()),
+        ),
         ("mean wall time per update (s)", num(s.wall_per_update(), 0)),
         ("mean train per update (s)", num(mean(|e| e.train_s), 0)),
         (

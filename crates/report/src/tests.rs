@@ -441,6 +441,7 @@ fn action_statistics_of_a_constant_gain_and_of_missing_components() {
         costs: None,
         actions: vec![vec![252.5, 10.0], vec![252.5, 30.0]],
         true_states: Vec::new(),
+        stopped_early: None,
     };
     assert_eq!(r.action_mean_std(0), Some((252.5, 0.0)));
     assert_eq!(r.action_mean_std(1), Some((20.0, 10.0)));
@@ -450,6 +451,38 @@ fn action_statistics_of_a_constant_gain_and_of_missing_components() {
         ..r
     };
     assert_eq!(empty.action_mean_std(0), None);
+}
+
+#[test]
+fn totals_list_the_rollouts_the_system_ended_early() {
+    let tmp = TempDir::new("ended-early");
+    write_run(tmp.path(), Kind::Vil);
+    let row = |page: &str| {
+        md_rows(page, "## Totals")
+            .into_iter()
+            .find(|r| r[0] == "roll-outs the system ended early")
+            .inspect(|r| assert_eq!(r.len(), 2, "{r:?}"))
+            .map(|r| r[1].to_string())
+            .expect("an ended-early row")
+    };
+    write_report(tmp.path()).unwrap();
+    assert_eq!(row(&markdown(tmp.path())), "none");
+
+    let why = "simulation diverged at t = 4.1410 s: |q̇2| = 1.7690e2 rad/s";
+    let episode = std::cell::Cell::new(None);
+    edit_lines(&tmp.path().join("rollouts.jsonl"), |i, v| {
+        if i == 2 {
+            episode.set(v["episode"].as_u64());
+            let infos = v["rollout"]["infos"].as_array_mut().unwrap();
+            infos.push(serde_json::json!({"stopped_early": why}));
+        }
+    });
+    write_report(tmp.path()).unwrap();
+    // The reason's pipes are escaped, so the table keeps two columns.
+    let escaped = why.replace('|', "\\|");
+    let expected = format!("update {}, roll-out 1: {escaped}", episode.get().unwrap());
+    assert_eq!(row(&markdown(tmp.path())), expected);
+    assert!(html(tmp.path()).contains("roll-outs the system ended early"));
 }
 
 #[test]
