@@ -368,6 +368,7 @@ pub fn linear_policy(cfg: &ArmExperiment, seed: u64) -> Result<LinearPolicy, Exp
 /// wall). An episode the simulator stopped early (singular Jacobian, runaway joint) never
 /// succeeds.
 pub fn inserted(r: &Rollout) -> bool {
+    // Records written before `stopped_early` existed mark a singular stop by its flag alone.
     let stopped_early = r
         .infos
         .iter()
