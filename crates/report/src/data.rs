@@ -328,12 +328,12 @@ impl Run {
         let Some(rollouts) = &self.rollouts else {
             return "–".into();
         };
-        let mut seen: Vec<u64> = Vec::new();
+        let mut per_update: std::collections::BTreeMap<u64, usize> = Default::default();
         let ended: Vec<String> = rollouts
             .iter()
             .filter_map(|r| {
-                seen.push(r.episode);
-                let j = seen.iter().filter(|&&e| e == r.episode).count();
+                let j = per_update.entry(r.episode).or_default();
+                *j += 1;
                 let why = r.stopped_early.as_ref()?;
                 Some(format!("update {}, roll-out {j}: {why}", r.episode))
             })
@@ -459,15 +459,16 @@ fn parse_trajectory(r: Node<'_>) -> Result<(Rows, Rows), ReportError> {
 }
 
 fn parse_rollout_line(n: Node<'_>) -> Result<Rollout, ReportError> {
-    let (actions, true_states) = n.req("rollout", parse_trajectory)?;
-    let stopped_early = n.req("rollout", |r| {
-        r.with("infos", |infos| match infos {
+    let (actions, true_states, stopped_early) = n.req("rollout", |r| {
+        let (actions, true_states) = parse_trajectory(r)?;
+        let stopped_early = r.with("infos", |infos| match infos {
             None => Ok(None),
             Some(infos) => Ok(infos
                 .map_array(|i| i.opt_string("stopped_early"))?
                 .pop()
                 .flatten()),
-        })
+        })?;
+        Ok((actions, true_states, stopped_early))
     })?;
     Ok(Rollout {
         episode: n.req_u64("episode")?,
