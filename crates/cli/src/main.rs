@@ -3,7 +3,9 @@
 
 mod acceptance_cmd;
 mod bench_cmd;
+mod evaluate_cmd;
 mod oracle_cmd;
+mod recorded;
 mod report_cmd;
 mod rescore_cmd;
 mod run_cmd;
@@ -77,6 +79,14 @@ enum Command {
     /// chooses otherwise. Past a rule's first such update, its verdicts are on the recorded
     /// models, not on those of its own run (`vicpilco run --replay-from` makes that run).
     Rescore(rescore_cmd::Args),
+    /// Roll out any update's policy of a recorded arm run from fresh starts.
+    ///
+    /// Reads the run's policies.jsonl and rolls each chosen update's policy out from the final
+    /// evaluation's starts (the same starts and sensor noise for every policy; the last
+    /// update's results repeat the run's final_eval.jsonl). Writes one JSON line per update
+    /// (each start's y, success, return, end position, largest force) and prints how many
+    /// starts insert per update.
+    Evaluate(evaluate_cmd::Args),
 }
 
 fn main() -> ExitCode {
@@ -96,6 +106,7 @@ fn main() -> ExitCode {
         Command::Report(args) => report_cmd::run(args).map(|()| ExitCode::SUCCESS),
         Command::Acceptance(args) => acceptance_cmd::run(args).map(|()| ExitCode::SUCCESS),
         Command::Rescore(args) => rescore_cmd::run(args).map(|()| ExitCode::SUCCESS),
+        Command::Evaluate(args) => evaluate_cmd::run(args).map(|()| ExitCode::SUCCESS),
     };
     match result {
         Ok(code) => code,

@@ -1,17 +1,12 @@
+use crate::recorded::RecordedRun;
 use anyhow::Context;
 use std::path::PathBuf;
 use vicpilco_learn::selection::ModelSelection;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The recorded run's experiment (as given to `vicpilco run`).
-    name: String,
-    /// The recorded run's seed.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
-    /// The recorded run's directory (read only).
-    #[arg(long, value_name = "DIR")]
-    from: PathBuf,
+    #[command(flatten)]
+    run: RecordedRun,
     /// The run's settings, if not the shipped ones (its gp.model_selection may differ from the
     /// run's: that rule is reported as `other`).
     #[arg(long, value_name = "FILE")]
@@ -20,27 +15,20 @@ pub struct Args {
     /// runs/<name>-seed<S>-rescore.jsonl.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
-    /// The recorded run was a --quick one.
-    #[arg(long)]
-    quick: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let out = args.out.unwrap_or_else(|| {
-        PathBuf::from(format!(
-            "runs/{}-seed{}-rescore.jsonl",
-            args.name, args.seed
-        ))
-    });
+    let run = args.run;
+    let out = args.out.unwrap_or_else(|| run.default_out("rescore"));
     let opts = vicpilco_experiments::RescoreOptions {
-        seed: args.seed,
-        from: args.from.clone(),
+        seed: run.seed,
+        from: run.from.clone(),
         config: args.config,
         out: out.clone(),
-        quick: args.quick,
+        quick: run.quick,
     };
-    let updates = vicpilco_experiments::rescore(&args.name, &opts)
-        .with_context(|| format!("rescoring {}", args.from.display()))?;
+    let updates = vicpilco_experiments::rescore(&run.name, &opts)
+        .with_context(|| format!("rescoring {}", run.from.display()))?;
     println!("rule: updates where it chooses otherwise than the recorded run");
     for rule in ModelSelection::COMPARING {
         let parting: Vec<String> = updates

@@ -5,8 +5,9 @@
 use crate::config::{ArmExperiment, PolicyKind, Task};
 use crate::summary::{FinalEval, SeedRule, Summary, ThesisCheck};
 use crate::{arm, ExperimentError, RunOptions};
+use vicpilco_env::Environment;
 use vicpilco_learn::data::Rollout;
-use vicpilco_learn::outer::{derive_seed, rollout, LoopOutcome};
+use vicpilco_learn::outer::{derive_seed, rollout, LoopOutcome, LoopSetup};
 use vicpilco_pilco::policy::Policy;
 // The vil-sic claim that needs a GIC run of the same seed: `vicpilco acceptance` decides it by
 // comparing the two runs' `final_mean_gains` k_y.
@@ -60,17 +61,12 @@ where
         let path = opts.out.join("final_eval.jsonl");
         let mut lines = String::new();
         let mut successes = 0;
-        for i in 0..n_eval {
-            // Own seeds: none of the learning roll-outs' streams.
-            let base = derive_seed(opts.seed, 1000 + i as u64, arm::PURPOSE_EVALUATION);
-            let start = setup.env_start.sample(derive_seed(base, 0, 1))?;
-            let policy = &outcome.policy;
-            let r = rollout(&mut env, &start, derive_seed(base, 0, 2), |t, obs| {
-                Ok(setup.act(policy, None, t, obs))
-            })?;
+        for (start_y, r) in
+            fresh_start_rollouts(&setup, &mut env, &outcome.policy, opts.seed, n_eval)?
+        {
             let ok = arm::inserted(&r);
             successes += usize::from(ok);
-            let line = serde_json::json!({ "start_y": start[1], "success": ok, "rollout": r });
+            let line = serde_json::json!({ "start_y": start_y, "success": ok, "rollout": r });
             lines.push_str(&line.to_string());
             lines.push('\n');
         }
@@ -82,6 +78,29 @@ where
         });
     }
     Ok(summary)
+}
+
+/// `policy` rolled out from `n` fresh starts of the run's start distribution, with each start's
+/// y: the final evaluation's roll-outs, and `vicpilco evaluate`'s for any update. Start i draws
+/// from its own seeds, which no learning roll-out uses and which do not depend on the policy,
+/// so every policy of a run meets the same starts with the same noise.
+pub fn fresh_start_rollouts<P: Policy + Clone + Sync>(
+    setup: &LoopSetup<P>,
+    env: &mut dyn Environment,
+    policy: &P,
+    seed: u64,
+    n: usize,
+) -> Result<Vec<(f64, Rollout)>, ExperimentError> {
+    (0..n)
+        .map(|i| {
+            let base = derive_seed(seed, 1000 + i as u64, arm::PURPOSE_EVALUATION);
+            let start = setup.env_start.sample(derive_seed(base, 0, 1))?;
+            let r = rollout(env, &start, derive_seed(base, 0, 2), |t, obs| {
+                Ok(setup.act(policy, None, t, obs))
+            })?;
+            Ok((start[1], r))
+        })
+        .collect()
 }
 
 /// Mean (k_x, k_y) over the first and the last [`GAIN_WINDOW_S`] seconds of a roll-out.

@@ -12,7 +12,8 @@
 //!   untrained policy the first update starts from), in [`Policy::params`]' order;
 //! * `checkpoint.json` — what `--resume` needs to continue bit for bit;
 //! * `policy.json` — the final policy parameters and dynamics hyper-parameters;
-//! * `final_eval.jsonl` — runs with evaluation starts: the final policy from fresh starts;
+//! * `final_eval.jsonl` — runs with evaluation starts: the final policy from fresh starts
+//!   (any update's policy: [`evaluate`]);
 //! * `report.html`, `report.md` and the plots (PNG, SVG) — [`vicpilco_report`], rewritten
 //!   after every update.
 //!
@@ -23,6 +24,7 @@ pub mod arm;
 pub mod checks;
 pub mod classic;
 pub mod config;
+pub mod evaluate;
 pub mod record;
 pub mod replay;
 pub mod subnormals;
@@ -68,6 +70,9 @@ pub enum ExperimentError {
     /// A recorded run that `--replay-from` or `rescore` cannot replay under these settings.
     #[error("cannot replay the recorded run {path}: {message}")]
     Replay { path: PathBuf, message: String },
+    /// A recorded run whose policies `evaluate` cannot roll out as asked.
+    #[error("cannot evaluate the recorded run {path}: {message}")]
+    Evaluate { path: PathBuf, message: String },
     #[error(transparent)]
     Report(#[from] vicpilco_report::ReportError),
 }
@@ -300,7 +305,7 @@ fn run_arm(
 
 /// The settings a resumed or replayed arm run must share with its record: all but the number
 /// of updates.
-fn arm_identity(cfg: &ArmExperiment) -> Result<serde_json::Value, ExperimentError> {
+pub(crate) fn arm_identity(cfg: &ArmExperiment) -> Result<serde_json::Value, ExperimentError> {
     serde_json::to_value(ArmExperiment {
         episodes: 0,
         ..cfg.clone()
@@ -324,6 +329,24 @@ pub struct RescoreOptions {
     pub quick: bool,
 }
 
+/// The settings of a recorded arm run that `what` reads: the `config` file or the shipped
+/// ones, with a `--quick` run's optimiser budget when `quick`.
+pub(crate) fn recorded_arm_config(
+    name: &str,
+    config: Option<&Path>,
+    quick: bool,
+    what: &'static str,
+) -> Result<ArmExperiment, ExperimentError> {
+    let mut cfg = load_config(name, config)?.ok_or_else(|| ExperimentError::NotArm {
+        name: name.to_string(),
+        what,
+    })?;
+    if quick {
+        cfg.optimiser.length = QUICK_LENGTH;
+    }
+    Ok(cfg)
+}
+
 /// Every comparing model-selection rule's verdict at each update of the recorded arm run
 /// `opts.from`, replayed along its own choices ([`replay::rescore`]); a cheap way to compare
 /// rules on recorded runs (the model fits only, no policy optimisation), in the same
@@ -332,14 +355,7 @@ pub fn rescore(
     name: &str,
     opts: &RescoreOptions,
 ) -> Result<Vec<vicpilco_learn::replay::ReplayedUpdate>, ExperimentError> {
-    let mut cfg =
-        load_config(name, opts.config.as_deref())?.ok_or_else(|| ExperimentError::NotArm {
-            name: name.to_string(),
-            what: "rescore",
-        })?;
-    if opts.quick {
-        cfg.optimiser.length = QUICK_LENGTH;
-    }
+    let cfg = recorded_arm_config(name, opts.config.as_deref(), opts.quick, "rescore")?;
     let identity = arm_identity(&cfg)?;
     subnormals::run_flushed(|| match cfg.policy.kind {
         PolicyKind::Rbf => {

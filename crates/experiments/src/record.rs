@@ -174,6 +174,23 @@ pub fn read_checkpoint_unchecked(dir: &Path) -> Result<Checkpoint, ExperimentErr
     serde_json::from_str(&text).map_err(|e| bad(e.to_string()))
 }
 
+/// A new file at `path` (its folder made if need be); refuses to overwrite one, so a result
+/// written earlier is never lost.
+pub(crate) fn create_new(path: &Path) -> Result<std::fs::File, ExperimentError> {
+    let io_err = |e: std::io::Error| ExperimentError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    };
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(io_err)?;
+    }
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(path)
+        .map_err(io_err)
+}
+
 /// The first path at which two JSON values differ.
 pub(crate) fn first_difference(
     a: &serde_json::Value,

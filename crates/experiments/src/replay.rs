@@ -202,14 +202,7 @@ where
         path: out.to_path_buf(),
         source: e,
     };
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(io_err)?;
-    }
-    let mut file = std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(out)
-        .map_err(io_err)?;
+    let mut file = crate::record::create_new(out)?;
     let mut written: Result<(), ExperimentError> = Ok(());
     let updates = setup
         .rescore_run(
@@ -255,7 +248,10 @@ fn choice(kept_previous: bool) -> &'static str {
 }
 
 /// `policies.jsonl`'s parameters of updates 0..=`completed`, in order.
-fn read_policies(dir: &Path, completed: usize) -> Result<Vec<Vec<f64>>, ExperimentError> {
+pub(crate) fn read_policies(
+    dir: &Path,
+    completed: usize,
+) -> Result<Vec<Vec<f64>>, ExperimentError> {
     let path = dir.join("policies.jsonl");
     let mut policies: Vec<Option<Vec<f64>>> = vec![None; completed + 1];
     for (i, line) in read_lines(&path)?.iter().enumerate() {

@@ -1,0 +1,67 @@
+use crate::recorded::RecordedRun;
+use anyhow::Context;
+use std::path::PathBuf;
+use vicpilco_experiments::evaluate::{evaluate, EvaluateOptions};
+
+#[derive(clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    run: RecordedRun,
+    /// The run's settings, if not the shipped ones.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Updates whose policies to roll out, comma-separated (0: the untrained policy); default
+    /// every update.
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    updates: Option<Vec<usize>>,
+    /// Fresh starts per policy; default the config's `vilta.evaluation_starts` (20 for
+    /// vilta-var).
+    #[arg(long, value_name = "N")]
+    starts: Option<usize>,
+    /// JSON-lines file of the results, one line per update (must not exist); default
+    /// runs/<name>-seed<S>-evaluate.jsonl.
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let run = args.run;
+    let out = args.out.unwrap_or_else(|| run.default_out("evaluate"));
+    let opts = EvaluateOptions {
+        seed: run.seed,
+        from: run.from.clone(),
+        config: args.config,
+        quick: run.quick,
+        updates: args.updates,
+        starts: args.starts,
+        out: out.clone(),
+    };
+    let results =
+        evaluate(&run.name, &opts).with_context(|| format!("evaluating {}", run.from.display()))?;
+    println!("| update | inserted | mean return | starts that fail (y0, m) |");
+    println!("|---|---|---|---|");
+    for u in &results {
+        let n = u.starts.len();
+        let mean = u.starts.iter().map(|s| s.recorded_return).sum::<f64>() / n as f64;
+        let failing: Vec<String> = u
+            .starts
+            .iter()
+            .filter(|s| !s.success)
+            .map(|s| format!("{:.3}", s.start_y))
+            .collect();
+        println!(
+            "| {} | {} of {n} | {mean:.1} | {} |",
+            u.update,
+            u.successes,
+            if failing.len() == n {
+                "all".to_string()
+            } else if failing.is_empty() {
+                "none".to_string()
+            } else {
+                failing.join(", ")
+            }
+        );
+    }
+    println!("per start: {}", out.display());
+    Ok(())
+}

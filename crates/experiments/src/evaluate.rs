@@ -1,0 +1,167 @@
+//! `vicpilco evaluate`: any update's policy of a recorded arm run, rolled out from fresh starts.
+//!
+//! The acceptance claims judge the final policy only, but a run's `policies.jsonl` keeps every
+//! update's policy. Rolling each one out from the final evaluation's starts (the same starts
+//! and noise for every policy, [`checks::fresh_start_rollouts`]) shows when a run found a
+//! policy that generalises over the start interval and whether it kept it: the thesis says of
+//! `vilta-var` that the hole is found "over the whole interval after 10 iterations" (§5-5-1),
+//! while the claim is on the policy after 15.
+
+use crate::checks;
+use crate::config::{ArmExperiment, PolicyKind};
+use crate::record::read_checkpoint;
+use crate::{arm, arm_identity, recorded_arm_config, subnormals, ExperimentError};
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+use vicpilco_env::Environment;
+use vicpilco_learn::outer::LoopSetup;
+use vicpilco_pilco::policy::Policy;
+
+/// What `vicpilco evaluate` reads and writes.
+#[derive(Clone, Debug)]
+pub struct EvaluateOptions {
+    /// The recorded run's seed (the starts are drawn from it, as the final evaluation's are).
+    pub seed: u64,
+    /// The recorded run's directory (read only).
+    pub from: PathBuf,
+    /// The run's settings (`--config` file, or the shipped ones); they must be the run's.
+    pub config: Option<PathBuf>,
+    /// The recorded run was a `--quick` one.
+    pub quick: bool,
+    /// The updates whose policies to evaluate (0: the untrained policy); `None`: every one.
+    pub updates: Option<Vec<usize>>,
+    /// Fresh starts per policy; `None`: the config's `vilta.evaluation_starts`.
+    pub starts: Option<usize>,
+    /// JSON-lines file of the results, one line per update (must not exist).
+    pub out: PathBuf,
+}
+
+/// One fresh start's roll-out, summarised.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StartOutcome {
+    pub start_y: f64,
+    /// The success test of the acceptance claims ([`arm::inserted`]).
+    pub success: bool,
+    /// The return the run would have recorded for this roll-out.
+    pub recorded_return: f64,
+    /// Where the peg ended (x, y) (m).
+    pub final_position: [f64; 2],
+    /// The largest contact force of the roll-out (N).
+    pub max_force: f64,
+    /// Why the system ended the roll-out early, if it did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped_early: Option<String>,
+}
+
+/// One update's policy from every fresh start.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct UpdateEvaluation {
+    pub update: usize,
+    pub successes: usize,
+    pub fraction: f64,
+    pub starts: Vec<StartOutcome>,
+}
+
+/// Evaluate the chosen updates' policies of the recorded run `opts.from` of experiment `name`
+/// from fresh starts; write one JSON line per update to `opts.out` as each is done, and return
+/// them. The run's settings must equal the config's (all but the number of updates), so the
+/// starts, the simulator and the success test are the run's own; the last update's line then
+/// repeats the run's `final_eval.jsonl`.
+pub fn evaluate(
+    name: &str,
+    opts: &EvaluateOptions,
+) -> Result<Vec<UpdateEvaluation>, ExperimentError> {
+    let cfg = recorded_arm_config(name, opts.config.as_deref(), opts.quick, "evaluate")?;
+    let n = opts
+        .starts
+        .or_else(|| cfg.vilta.as_ref().map(|v| v.evaluation_starts))
+        .filter(|&n| n > 0)
+        .ok_or_else(|| ExperimentError::Evaluate {
+            path: opts.from.clone(),
+            message: format!("`{name}` has no evaluation starts: give their number (--starts N)"),
+        })?;
+    let checkpoint = read_checkpoint(&opts.from, name, opts.seed, &arm_identity(&cfg)?)?;
+    let completed = checkpoint.state.completed;
+    let updates = match &opts.updates {
+        None => (0..=completed).collect(),
+        Some(u) => u.clone(),
+    };
+    if let Some(&u) = updates.iter().find(|&&u| u > completed) {
+        return Err(ExperimentError::Evaluate {
+            path: opts.from.clone(),
+            message: format!("the run has updates 0 to {completed}, not update {u}"),
+        });
+    }
+    let policies = crate::replay::read_policies(&opts.from, completed)?;
+    let chosen: Vec<(usize, &[f64])> = updates.iter().map(|&u| (u, &policies[u][..])).collect();
+    subnormals::run_flushed(|| match cfg.policy.kind {
+        PolicyKind::Rbf => {
+            let policy = arm::rbf_policy(&cfg, opts.seed)?;
+            each_update(&cfg, policy, &chosen, n, opts)
+        }
+        PolicyKind::Linear => {
+            let policy = arm::linear_policy(&cfg, opts.seed)?;
+            each_update(&cfg, policy, &chosen, n, opts)
+        }
+    })
+}
+
+fn each_update<P: Policy + Clone + Sync>(
+    cfg: &ArmExperiment,
+    policy: P,
+    chosen: &[(usize, &[f64])],
+    n: usize,
+    opts: &EvaluateOptions,
+) -> Result<Vec<UpdateEvaluation>, ExperimentError> {
+    use std::io::Write;
+    let (setup, mut env) = arm::setup(cfg, policy, opts.seed)?;
+    let mut file = crate::record::create_new(&opts.out)?;
+    let mut policy = setup.policy.clone();
+    let mut results = Vec::with_capacity(chosen.len());
+    for &(update, params) in chosen {
+        policy.set_params(params)?;
+        let result = evaluate_policy(&setup, &mut env, &policy, update, n, opts.seed)?;
+        let line = serde_json::to_string(&result).map_err(|e| ExperimentError::Write(e.into()))?;
+        writeln!(file, "{line}").map_err(|e| ExperimentError::Io {
+            path: opts.out.clone(),
+            source: e,
+        })?;
+        results.push(result);
+    }
+    Ok(results)
+}
+
+fn evaluate_policy<P: Policy + Clone + Sync>(
+    setup: &LoopSetup<P>,
+    env: &mut dyn Environment,
+    policy: &P,
+    update: usize,
+    n: usize,
+    seed: u64,
+) -> Result<UpdateEvaluation, ExperimentError> {
+    let starts: Vec<StartOutcome> = checks::fresh_start_rollouts(setup, env, policy, seed, n)?
+        .into_iter()
+        .map(|(start_y, r)| {
+            let last = r.true_states.last().map_or([f64::NAN; 2], |s| [s[0], s[1]]);
+            StartOutcome {
+                start_y,
+                success: arm::inserted(&r),
+                recorded_return: setup.recorded_return(&r),
+                final_position: last,
+                max_force: r
+                    .infos
+                    .iter()
+                    .filter_map(|i| i.values.get("max_abs_f").copied())
+                    .fold(0.0, f64::max),
+                stopped_early: r.infos.iter().find_map(|i| i.stopped_early.clone()),
+            }
+        })
+        .collect();
+    let successes = starts.iter().filter(|s| s.success).count();
+    Ok(UpdateEvaluation {
+        update,
+        successes,
+        fraction: successes as f64 / n as f64,
+        starts,
+    })
+}

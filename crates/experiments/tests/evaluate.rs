@@ -1,0 +1,157 @@
+//! `vicpilco evaluate` rolls out a recorded run's policies from the final evaluation's starts:
+//! on the final policy it repeats `final_eval.jsonl`, it reads each update's policy from
+//! `policies.jsonl`, and it refuses what it cannot do with an error that names why.
+
+use std::path::{Path, PathBuf};
+use vicpilco_experiments::evaluate::{evaluate, EvaluateOptions};
+use vicpilco_experiments::{run, ExperimentError, RunOptions};
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("vicpilco-evaluate-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+/// A vilta-var run of the initial search roll-out only: its final policy is the untrained one
+/// (update 0), evaluated from 20 fresh starts, with no GP fit or optimisation to pay for.
+fn initial_only_run(dir: &Path) {
+    let opts = RunOptions {
+        seed: 4,
+        out: dir.to_path_buf(),
+        episodes: Some(0),
+        ..Default::default()
+    };
+    run("vilta-var", &opts, &mut ()).expect("vilta-var with 0 updates");
+}
+
+fn options(from: &Path, out: PathBuf) -> EvaluateOptions {
+    EvaluateOptions {
+        seed: 4,
+        from: from.to_path_buf(),
+        config: None,
+        quick: false,
+        updates: None,
+        starts: None,
+        out,
+    }
+}
+
+fn lines(path: &Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+#[test]
+fn the_final_policy_repeats_the_final_evaluation_and_each_update_reads_its_own_policy() {
+    let base = scratch("repeat");
+    let run_dir = base.join("run");
+    initial_only_run(&run_dir);
+    let final_eval = lines(&run_dir.join("final_eval.jsonl"));
+    assert_eq!(final_eval.len(), 20);
+
+    let out = base.join("every-update.jsonl");
+    let results = evaluate("vilta-var", &options(&run_dir, out.clone())).unwrap();
+    assert_eq!(results.len(), 1, "updates 0 to 0");
+    let written = lines(&out);
+    assert_eq!(written.len(), 1);
+    assert_eq!(written[0]["update"], 0);
+    let u = &results[0];
+    assert_eq!(u.starts.len(), 20);
+    for (mine, recorded) in u.starts.iter().zip(&final_eval) {
+        let states = recorded["rollout"]["true_states"].as_array().unwrap();
+        let last = states.last().unwrap();
+        assert_eq!(mine.start_y, recorded["start_y"].as_f64().unwrap());
+        assert_eq!(mine.success, recorded["success"].as_bool().unwrap());
+        assert_eq!(mine.final_position[0], last[0].as_f64().unwrap());
+        assert_eq!(mine.final_position[1], last[1].as_f64().unwrap());
+        assert!(mine.recorded_return.is_finite() && mine.recorded_return > 0.0);
+        assert!(mine.max_force.is_finite() && mine.max_force >= 0.0);
+    }
+    assert!(
+        (0.1..=0.3).contains(&u.starts[0].start_y),
+        "{}",
+        u.starts[0].start_y
+    );
+    assert_eq!(u.successes, u.starts.iter().filter(|s| s.success).count());
+    assert_eq!(u.fraction, u.successes as f64 / 20.0);
+
+    // Another policy written for update 0 is the one rolled out: the same starts end elsewhere.
+    let policies = run_dir.join("policies.jsonl");
+    let mut line: serde_json::Value =
+        serde_json::from_str(std::fs::read_to_string(&policies).unwrap().trim()).unwrap();
+    for p in line["params"].as_array_mut().unwrap() {
+        *p = serde_json::json!(p.as_f64().unwrap() + 0.5);
+    }
+    std::fs::write(&policies, format!("{line}\n")).unwrap();
+    let other = evaluate(
+        "vilta-var",
+        &EvaluateOptions {
+            updates: Some(vec![0]),
+            starts: Some(3),
+            ..options(&run_dir, base.join("changed.jsonl"))
+        },
+    )
+    .unwrap();
+    assert_eq!(other[0].starts.len(), 3);
+    for (changed, first) in other[0].starts.iter().zip(&u.starts) {
+        assert_eq!(
+            changed.start_y, first.start_y,
+            "the starts do not depend on the policy"
+        );
+        assert_ne!(changed.final_position, first.final_position);
+    }
+    let _ = std::fs::remove_dir_all(&base);
+}
+
+#[test]
+fn what_evaluate_cannot_do_is_an_error_naming_why() {
+    let base = scratch("errors");
+    let run_dir = base.join("run");
+    initial_only_run(&run_dir);
+    let message = |r: Result<_, ExperimentError>| r.map(|_| ()).unwrap_err().to_string();
+
+    let beyond = EvaluateOptions {
+        updates: Some(vec![0, 3]),
+        ..options(&run_dir, base.join("beyond.jsonl"))
+    };
+    let m = message(evaluate("vilta-var", &beyond));
+    assert!(m.contains("updates 0 to 0, not update 3"), "{m}");
+    assert!(
+        !base.join("beyond.jsonl").exists(),
+        "nothing written for a bad request"
+    );
+
+    let out = base.join("once.jsonl");
+    evaluate("vilta-var", &options(&run_dir, out.clone())).unwrap();
+    let m = message(evaluate("vilta-var", &options(&run_dir, out.clone())));
+    assert!(
+        m.contains("once.jsonl"),
+        "an earlier result is not overwritten: {m}"
+    );
+    assert_eq!(lines(&out).len(), 1);
+
+    let m = message(evaluate(
+        "vilta",
+        &EvaluateOptions {
+            starts: Some(2),
+            ..options(&run_dir, base.join("vilta.jsonl"))
+        },
+    ));
+    assert!(m.contains("vilta-var") && m.contains("not `vilta`"), "{m}");
+
+    let m = message(evaluate(
+        "vilta",
+        &options(&run_dir, base.join("none.jsonl")),
+    ));
+    assert!(m.contains("--starts"), "{m}");
+
+    let m = message(evaluate(
+        "pendulum",
+        &options(&run_dir, base.join("p.jsonl")),
+    ));
+    assert!(m.contains("not an arm experiment"), "{m}");
+    let _ = std::fs::remove_dir_all(&base);
+}
