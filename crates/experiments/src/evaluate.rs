@@ -92,7 +92,11 @@ pub fn evaluate(
             message: format!("the run has updates 0 to {completed}, not update {u}"),
         });
     }
-    let policies = crate::replay::read_policies(&opts.from, completed)?;
+    // A missing or unreadable policy is this command's failure, not a replay's.
+    let policies = crate::replay::read_policies(&opts.from, completed).map_err(|e| match e {
+        ExperimentError::Replay { path, message } => ExperimentError::Evaluate { path, message },
+        e => e,
+    })?;
     let chosen: Vec<(usize, &[f64])> = updates.iter().map(|&u| (u, &policies[u][..])).collect();
     subnormals::run_flushed(|| match cfg.policy.kind {
         PolicyKind::Rbf => {

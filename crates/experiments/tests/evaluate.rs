@@ -153,5 +153,15 @@ fn what_evaluate_cannot_do_is_an_error_naming_why() {
         &options(&run_dir, base.join("p.jsonl")),
     ));
     assert!(m.contains("not an arm experiment"), "{m}");
+
+    std::fs::write(run_dir.join("policies.jsonl"), "").unwrap();
+    let m = message(evaluate(
+        "vilta-var",
+        &options(&run_dir, base.join("gone.jsonl")),
+    ));
+    assert!(
+        m.contains("cannot evaluate") && m.contains("no policy of update 0"),
+        "{m}"
+    );
     let _ = std::fs::remove_dir_all(&base);
 }
