@@ -363,6 +363,15 @@ pub fn linear_policy(cfg: &ArmExperiment, seed: u64) -> Result<LinearPolicy, Exp
     Ok(LinearPolicy::new(w.as_ref(), &vec![0.0; m])?)
 }
 
+/// The largest contact force |f| (N) at the end of any step of a roll-out: `summary.json`'s
+/// `max_force` and `vicpilco evaluate`'s, one definition for both.
+pub fn largest_force(r: &Rollout) -> f64 {
+    r.true_states
+        .iter()
+        .map(|s| s[4].hypot(s[5]))
+        .fold(0.0, f64::max)
+}
+
 /// Whether the peg ended fully inserted at the end of the episode (the simulator's
 /// `inserted` flag after the last step: in the hole within the insertion tolerance of the end
 /// wall). An episode the simulator stopped early (singular Jacobian, runaway joint) never

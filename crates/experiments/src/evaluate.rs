@@ -46,7 +46,7 @@ pub struct StartOutcome {
     pub recorded_return: f64,
     /// Where the peg ended (x, y) (m).
     pub final_position: [f64; 2],
-    /// The largest contact force of the roll-out (N).
+    /// The largest contact force of the roll-out (N), as `summary.json`'s `max_force`.
     pub max_force: f64,
     /// Why the system ended the roll-out early, if it did.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -152,11 +152,7 @@ fn evaluate_policy<P: Policy + Clone + Sync>(
                 success: arm::inserted(&r),
                 recorded_return: setup.recorded_return(&r),
                 final_position: last,
-                max_force: r
-                    .infos
-                    .iter()
-                    .filter_map(|i| i.values.get("max_abs_f").copied())
-                    .fold(0.0, f64::max),
+                max_force: arm::largest_force(&r),
                 stopped_early: r.infos.iter().find_map(|i| i.stopped_early.clone()),
             }
         })

@@ -228,11 +228,7 @@ where
 /// (final x, largest |f|, start y) of an arm roll-out.
 fn arm_extras(r: &vicpilco_learn::data::Rollout) -> (f64, f64, f64) {
     let final_x = r.true_states.last().map_or(f64::NAN, |s| s[0]);
-    let max_force = r
-        .true_states
-        .iter()
-        .map(|s| s[4].hypot(s[5]))
-        .fold(0.0, f64::max);
+    let max_force = arm::largest_force(r);
     let start_y = r.true_states.first().map_or(f64::NAN, |s| s[1]);
     (final_x, max_force, start_y)
 }
