@@ -117,6 +117,7 @@ fn measured_reference_origin_keeps_the_force_against_a_wall_from_growing() {
                 delta_max: 0.0025,
                 delta_tick: 0.005,
                 origin,
+                max_lead: None,
             },
             ..ArmConfig::ideal()
         };
@@ -145,4 +146,67 @@ fn measured_reference_origin_keeps_the_force_against_a_wall_from_growing() {
     );
     assert!(growth(&measured).abs() < 5.0, "measured: {measured:?}");
     assert!(measured[39].1 < integrated[39].1 / 2.0);
+}
+
+/// With `max_lead` the reference pushed on into the wall face stops `max_lead` ahead of the
+/// TCP: the force levels off near k · max_lead instead of growing by k · v_max · Δt per step,
+/// and the reported reference stays within `max_lead` of the TCP; pulled back, the reference
+/// leaves the wall at once.
+#[test]
+fn max_lead_holds_the_reference_and_the_force_against_a_wall() {
+    use vicpilco_env::arm::ReferenceOrigin;
+    let (k, lead) = (250.0, 0.05);
+    let cfg = ArmConfig {
+        mode: ActionMode::Vilta {
+            delta_max: 0.0025,
+            delta_tick: 0.005,
+            origin: ReferenceOrigin::Start,
+            max_lead: Some(lead),
+        },
+        ..ArmConfig::ideal()
+    };
+    let mut env = ArmEnv::new(cfg).unwrap();
+    env.reset(&[0.5, 0.0, 0.0, 0.0, 0.0, 0.0], 1).unwrap();
+    let mut pressed = Vec::new();
+    for _ in 0..40 {
+        let s = env.step(&[k, k, 0.0025, 0.0]).unwrap();
+        let (x, r) = (s.info.true_state[0], s.info.reference.clone().unwrap());
+        assert!(
+            r[0] - x <= lead + 1e-3,
+            "reference {r:?} leads x = {x} by more than {lead}"
+        );
+        pressed.push((x, s.observation[4]));
+    }
+    assert!(
+        pressed[20..].iter().all(|(x, _)| (x - 0.65).abs() < 0.01),
+        "{pressed:?}"
+    );
+    let f_end = pressed[39].1;
+    assert!(
+        (f_end - k * lead).abs() < 2.0,
+        "force {f_end} N against k · max_lead = {} N: {pressed:?}",
+        k * lead
+    );
+    assert!((f_end - pressed[20].1).abs() < 1.0, "{pressed:?}");
+    // One step of pulling back at full speed takes the reference 5 cm back: off the wall.
+    let s = env.step(&[k, k, -0.0025, 0.0]).unwrap();
+    assert!(s.observation[4].abs() < 5.0, "{:?}", s.observation);
+}
+
+#[test]
+fn max_lead_must_be_positive() {
+    use vicpilco_env::arm::ReferenceOrigin;
+    for bad in [0.0, -0.01, f64::NAN] {
+        let cfg = ArmConfig {
+            mode: ActionMode::Vilta {
+                delta_max: 0.0025,
+                delta_tick: 0.005,
+                origin: ReferenceOrigin::Start,
+                max_lead: Some(bad),
+            },
+            ..ArmConfig::ideal()
+        };
+        let err = ArmEnv::new(cfg).unwrap_err().to_string();
+        assert!(err.contains("mode.max_lead"), "{bad}: {err}");
+    }
 }

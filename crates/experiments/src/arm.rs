@@ -79,6 +79,7 @@ pub fn arm_config(cfg: &ArmExperiment) -> ArmConfig {
             delta_max: cfg.policy.delta_max.unwrap_or(0.0),
             delta_tick: v.delta_tick,
             origin: v.reference,
+            max_lead: v.max_lead,
         };
         arm.geometry = arm.geometry.shifted(v.geometry_shift_x, 0.0);
     }

@@ -295,6 +295,10 @@ pub struct ViltaConfig {
         skip_serializing_if = "vicpilco_env::arm::ReferenceOrigin::is_start"
     )]
     pub reference: vicpilco_env::arm::ReferenceOrigin,
+    /// Largest lead (m) of the reference over the measured TCP position on each axis (ours;
+    /// absent: unbounded, as issue 5). See `ActionMode::Vilta::max_lead` and EXPERIMENTS.md.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_lead: Option<f64>,
 }
 
 /// The config text and file label of a shipped name (aliases resolved).
@@ -556,6 +560,9 @@ impl ArmExperiment {
                     c.finite("vilta.geometry_shift_x", v.geometry_shift_x)?;
                     c.positive("vilta.delta_tick", v.delta_tick)?;
                     c.at_least("vilta.rollouts_per_iteration", v.rollouts_per_iteration, 1)?;
+                    if let Some(d) = v.max_lead {
+                        c.positive("vilta.max_lead", d)?;
+                    }
                 }
             }
         }
@@ -603,6 +610,9 @@ impl ArmExperiment {
         }
         if self.vilta.as_ref().is_some_and(|v| !v.reference.is_start()) {
             keys.push("vilta.reference");
+        }
+        if self.vilta.as_ref().is_some_and(|v| v.max_lead.is_some()) {
+            keys.push("vilta.max_lead");
         }
         if self.controller == ControllerKind::Sic && self.policy.kind == PolicyKind::Rbf {
             keys.push("policy.n_basis");

@@ -268,6 +268,41 @@ fn vilta_reference_origin_is_the_start_unless_set_and_then_an_ours_key() {
 }
 
 #[test]
+fn vilta_max_lead_is_unbounded_unless_set_positive_and_then_an_ours_key() {
+    use vicpilco_env::arm::ActionMode;
+    let lead = |cfg: &config::ArmExperiment| match arm::arm_config(cfg).mode {
+        ActionMode::Vilta { max_lead, .. } => max_lead,
+        ActionMode::Vil => panic!("a VILTA config"),
+    };
+    for name in ["vilta", "vilta-var"] {
+        let base = shipped(name);
+        assert_eq!(lead(&base), None);
+        assert!(!base.ours_keys().contains(&"vilta.max_lead"));
+        // Not written when absent, so stored runs keep their identity.
+        let written = serde_json::to_value(&base).unwrap();
+        assert!(written["vilta"].get("max_lead").is_none(), "{written}");
+    }
+    let text = config::shipped("vilta").unwrap().1;
+    let set = |value: &str| {
+        with_line_after(
+            text,
+            "rollouts_per_iteration = 1",
+            &format!("max_lead = {value}"),
+        )
+    };
+    let cfg = config::parse(&set("0.05"), "test.toml").unwrap();
+    assert_eq!(lead(&cfg), Some(0.05));
+    assert!(cfg.ours_keys().contains(&"vilta.max_lead"));
+    for bad in ["0.0", "-0.05", "nan"] {
+        let err = error_of(&set(bad));
+        assert!(
+            err.contains("vilta.max_lead") && err.contains("test.toml"),
+            "{bad}: {err}"
+        );
+    }
+}
+
+#[test]
 fn sensor_noise_is_on_unless_switched_off_and_then_an_ours_key() {
     for name in ["vil-gic-rbf10", "vil-sic", "vilta"] {
         let base = shipped(name);

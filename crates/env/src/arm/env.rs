@@ -24,9 +24,11 @@ pub struct ArmEnv {
     sim: Option<ArmSim>,
     steps: usize,
     done: bool,
-    /// VILTA: the integrated reference (x_v, y_v, φ_v) and its current velocity.
+    /// VILTA: the integrated reference (x_v, y_v, φ_v) and its commanded velocity.
     vilta_x: V3,
     vilta_xd: V3,
+    /// VILTA with `max_lead`: the axes on which x_v is held at `max_lead` from the TCP.
+    vilta_held: [bool; 2],
 }
 
 impl ArmEnv {
@@ -40,6 +42,7 @@ impl ArmEnv {
             done: false,
             vilta_x: [0.0; 3],
             vilta_xd: [0.0; 3],
+            vilta_held: [false; 2],
         })
     }
 
@@ -123,11 +126,37 @@ impl ArmEnv {
     fn reference_at(&self, t: f64) -> RefPoint {
         match self.cfg.mode {
             ActionMode::Vil => self.cfg.reference.eval(t),
-            ActionMode::Vilta { .. } => RefPoint {
-                x: self.vilta_x,
-                xd: self.vilta_xd,
-                xdd: [0.0; 3],
-            },
+            ActionMode::Vilta { .. } => {
+                let mut xd = self.vilta_xd;
+                for i in 0..2 {
+                    // A held reference stands still in the damping term, which then damps
+                    // the TCP's own velocity; following the TCP's velocity instead would take
+                    // all damping away and leave the peg bouncing on the wall.
+                    if self.vilta_held[i] {
+                        xd[i] = 0.0;
+                    }
+                }
+                RefPoint {
+                    x: self.vilta_x,
+                    xd,
+                    xdd: [0.0; 3],
+                }
+            }
+        }
+    }
+
+    /// VILTA with `max_lead`: holds x_v within `max_lead` of the TCP on x and y, as the
+    /// controller measures it from its latest reading.
+    fn hold_reference_lead(&mut self, max_lead: f64) {
+        let sim = self.sim.as_ref().expect("called after reset");
+        let r = sim.reading();
+        let measured = impedance::task_state(sim.model(), &r.q, &r.qd);
+        for i in 0..2 {
+            let lead = self.vilta_x[i] - measured.x[i];
+            self.vilta_held[i] = lead.abs() > max_lead;
+            if self.vilta_held[i] {
+                self.vilta_x[i] = measured.x[i] + max_lead.copysign(lead);
+            }
         }
     }
 }
@@ -204,6 +233,7 @@ impl Environment for ArmEnv {
         self.done = false;
         self.vilta_x = pose;
         self.vilta_xd = [0.0; 3];
+        self.vilta_held = [false; 2];
         Ok(self.observation(&r))
     }
 
@@ -259,9 +289,12 @@ impl Environment for ArmEnv {
             }
             let w = sim.contact().w;
             max_f = max_f.max(w[0].hypot(w[1]));
-            if let ActionMode::Vilta { .. } = self.cfg.mode {
+            if let ActionMode::Vilta { max_lead, .. } = self.cfg.mode {
                 for i in 0..2 {
                     self.vilta_x[i] += self.vilta_xd[i] * dt;
+                }
+                if let Some(d) = max_lead {
+                    self.hold_reference_lead(d);
                 }
             }
         }

@@ -286,6 +286,14 @@ pub enum ActionMode {
         /// Where the integration of the reference starts.
         #[serde(default, skip_serializing_if = "ReferenceOrigin::is_start")]
         origin: ReferenceOrigin,
+        /// Largest distance (m) x_v may lead the controller's measured TCP position along each
+        /// of x and y (ours; `None`: unbounded, as issue 5). Past it x_v is held at that
+        /// distance ahead of the TCP, with ẋ_v = 0 on that axis, as a real impedance
+        /// controller saturates its tracking error: the spring force then stays within
+        /// k · max_lead, the damping acts on the TCP's own velocity, and the hidden part of
+        /// the state, x_v − x, stays within ±max_lead.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        max_lead: Option<f64>,
     },
 }
 
@@ -332,6 +340,7 @@ impl ActionMode {
             delta_max: 0.0025,
             delta_tick: 0.005,
             origin: ReferenceOrigin::Start,
+            max_lead: None,
         }
     }
 }
@@ -475,11 +484,15 @@ impl ArmConfig {
         if let ActionMode::Vilta {
             delta_max,
             delta_tick,
+            max_lead,
             ..
         } = self.mode
         {
             positive("mode.delta_max", delta_max)?;
             positive("mode.delta_tick", delta_tick)?;
+            if let Some(d) = max_lead {
+                positive("mode.max_lead", d)?;
+            }
         }
         self.reference.validate()?;
         positive("singular_det", self.singular_det)?;
