@@ -24,11 +24,11 @@ pub struct ArmEnv {
     sim: Option<ArmSim>,
     steps: usize,
     done: bool,
-    /// VILTA: the integrated reference (x_v, y_v, φ_v) and its commanded velocity.
+    /// VILTA: the integrated reference (x_v, y_v, φ_v), its commanded velocity, and the
+    /// velocity it moves at this tick (the commanded one unless `max_lead` slows it).
     vilta_x: V3,
     vilta_xd: V3,
-    /// VILTA with `max_lead`: the axes on which x_v is held at `max_lead` from the TCP.
-    vilta_held: [bool; 2],
+    vilta_xd_now: V3,
 }
 
 impl ArmEnv {
@@ -42,7 +42,7 @@ impl ArmEnv {
             done: false,
             vilta_x: [0.0; 3],
             vilta_xd: [0.0; 3],
-            vilta_held: [false; 2],
+            vilta_xd_now: [0.0; 3],
         })
     }
 
@@ -126,36 +126,47 @@ impl ArmEnv {
     fn reference_at(&self, t: f64) -> RefPoint {
         match self.cfg.mode {
             ActionMode::Vil => self.cfg.reference.eval(t),
-            ActionMode::Vilta { .. } => {
-                let mut xd = self.vilta_xd;
-                for i in 0..2 {
-                    // A held reference stands still in the damping term, which then damps
-                    // the TCP's own velocity; following the TCP's velocity instead would take
-                    // all damping away and leave the peg bouncing on the wall.
-                    if self.vilta_held[i] {
-                        xd[i] = 0.0;
-                    }
-                }
-                RefPoint {
-                    x: self.vilta_x,
-                    xd,
-                    xdd: [0.0; 3],
-                }
-            }
+            ActionMode::Vilta { .. } => RefPoint {
+                x: self.vilta_x,
+                xd: self.vilta_xd_now,
+                xdd: [0.0; 3],
+            },
         }
     }
 
-    /// VILTA with `max_lead`: holds x_v within `max_lead` of the TCP on x and y, as the
-    /// controller measures it from its latest reading.
-    fn hold_reference_lead(&mut self, max_lead: f64) {
+    /// The TCP position as the controller estimates it from its latest reading.
+    fn measured_position(&self) -> [f64; 2] {
         let sim = self.sim.as_ref().expect("called after reset");
         let r = sim.reading();
-        let measured = impedance::task_state(sim.model(), &r.q, &r.qd);
+        let est = impedance::task_state(sim.model(), &r.q, &r.qd);
+        [est.x[0], est.x[1]]
+    }
+
+    /// VILTA with `max_lead` d: the commanded velocity, slowed on each axis where it pushes
+    /// the lead ℓ = x_v − x further out, by the factor max(0, 1 − |ℓ|/d). The lead then
+    /// approaches d smoothly: switching the reference velocity between v and 0 at a hard
+    /// limit would switch the damping force B_d · v (≈ 220 N at v_max) on and off every tick
+    /// and rattle the peg against a wall.
+    fn slowed_reference_velocity(&self, max_lead: f64) -> V3 {
+        let x = self.measured_position();
+        let mut xd = self.vilta_xd;
         for i in 0..2 {
-            let lead = self.vilta_x[i] - measured.x[i];
-            self.vilta_held[i] = lead.abs() > max_lead;
-            if self.vilta_held[i] {
-                self.vilta_x[i] = measured.x[i] + max_lead.copysign(lead);
+            let lead = self.vilta_x[i] - x[i];
+            if xd[i] * lead > 0.0 {
+                xd[i] *= (1.0 - lead.abs() / max_lead).max(0.0);
+            }
+        }
+        xd
+    }
+
+    /// VILTA with `max_lead`: a TCP pushed back from its reference (a bounce, a surface) drags
+    /// x_v along, so the lead never exceeds `max_lead`.
+    fn drag_reference(&mut self, max_lead: f64) {
+        let x = self.measured_position();
+        for i in 0..2 {
+            let lead = self.vilta_x[i] - x[i];
+            if lead.abs() > max_lead {
+                self.vilta_x[i] = x[i] + max_lead.copysign(lead);
             }
         }
     }
@@ -233,7 +244,7 @@ impl Environment for ArmEnv {
         self.done = false;
         self.vilta_x = pose;
         self.vilta_xd = [0.0; 3];
-        self.vilta_held = [false; 2];
+        self.vilta_xd_now = [0.0; 3];
         Ok(self.observation(&r))
     }
 
@@ -266,6 +277,12 @@ impl Environment for ArmEnv {
             let sim = self.sim.as_ref().expect("checked above");
             let t = sim.t();
             let dt = sim.tick_dt();
+            if let ActionMode::Vilta { max_lead, .. } = self.cfg.mode {
+                self.vilta_xd_now = match max_lead {
+                    Some(d) => self.slowed_reference_velocity(d),
+                    None => self.vilta_xd,
+                };
+            }
             let refp = self.reference_at(t);
             let sim = self.sim.as_mut().expect("checked above");
             match sim.tick(k, &refp) {
@@ -291,10 +308,10 @@ impl Environment for ArmEnv {
             max_f = max_f.max(w[0].hypot(w[1]));
             if let ActionMode::Vilta { max_lead, .. } = self.cfg.mode {
                 for i in 0..2 {
-                    self.vilta_x[i] += self.vilta_xd[i] * dt;
+                    self.vilta_x[i] += self.vilta_xd_now[i] * dt;
                 }
                 if let Some(d) = max_lead {
-                    self.hold_reference_lead(d);
+                    self.drag_reference(d);
                 }
             }
         }

@@ -287,11 +287,11 @@ pub enum ActionMode {
         #[serde(default, skip_serializing_if = "ReferenceOrigin::is_start")]
         origin: ReferenceOrigin,
         /// Largest distance (m) x_v may lead the controller's measured TCP position along each
-        /// of x and y (ours; `None`: unbounded, as issue 5). Past it x_v is held at that
-        /// distance ahead of the TCP, with ẋ_v = 0 on that axis, as a real impedance
-        /// controller saturates its tracking error: the spring force then stays within
-        /// k · max_lead, the damping acts on the TCP's own velocity, and the hidden part of
-        /// the state, x_v − x, stays within ±max_lead.
+        /// of x and y (ours; `None`: unbounded, as issue 5), as a real impedance controller
+        /// saturates its tracking error. A command pushing the lead ℓ further out is slowed by
+        /// max(0, 1 − |ℓ|/max_lead), so ℓ approaches the limit smoothly; a TCP pushed back
+        /// drags x_v along. The spring force then stays within k · max_lead and the state the
+        /// GP does not see, x_v − x, within ±max_lead.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         max_lead: Option<f64>,
     },
