@@ -28,13 +28,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let run = args.run;
     let out = args.out.unwrap_or_else(|| run.default_out("evaluate"));
     let opts = EvaluateOptions {
-        seed: run.seed,
-        from: run.from.clone(),
-        config: args.config,
-        quick: run.quick,
+        run: run.options(args.config, out.clone()),
         updates: args.updates,
         starts: args.starts,
-        out: out.clone(),
     };
     let results =
         evaluate(&run.name, &opts).with_context(|| format!("evaluating {}", run.from.display()))?;

@@ -1,4 +1,5 @@
 use std::path::PathBuf;
+use vicpilco_experiments::RecordedRunOptions;
 
 /// The recorded arm run a command reads (`rescore`, `evaluate`).
 #[derive(clap::Args)]
@@ -17,6 +18,17 @@ pub struct RecordedRun {
 }
 
 impl RecordedRun {
+    /// The library's options for this run, with its settings file and the output file.
+    pub fn options(&self, config: Option<PathBuf>, out: PathBuf) -> RecordedRunOptions {
+        RecordedRunOptions {
+            seed: self.seed,
+            from: self.from.clone(),
+            config,
+            out,
+            quick: self.quick,
+        }
+    }
+
     /// Where a command's JSON lines go when no --out is given: runs/<name>-seed<S>-<what>.jsonl.
     pub fn default_out(&self, what: &str) -> PathBuf {
         PathBuf::from(format!("runs/{}-seed{}-{what}.jsonl", self.name, self.seed))

@@ -20,13 +20,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let run = args.run;
     let out = args.out.unwrap_or_else(|| run.default_out("rescore"));
-    let opts = vicpilco_experiments::RescoreOptions {
-        seed: run.seed,
-        from: run.from.clone(),
-        config: args.config,
-        out: out.clone(),
-        quick: run.quick,
-    };
+    let opts = run.options(args.config, out.clone());
     let updates = vicpilco_experiments::rescore(&run.name, &opts)
         .with_context(|| format!("rescoring {}", run.from.display()))?;
     println!("rule: updates where it chooses otherwise than the recorded run");

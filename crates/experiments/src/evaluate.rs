@@ -10,9 +10,10 @@
 use crate::checks;
 use crate::config::{ArmExperiment, PolicyKind};
 use crate::record::read_checkpoint;
-use crate::{arm, arm_identity, recorded_arm_config, subnormals, ExperimentError};
+use crate::{
+    arm, arm_identity, recorded_arm_config, subnormals, ExperimentError, RecordedRunOptions,
+};
 use serde::{Deserialize, Serialize};
-use std::path::PathBuf;
 use vicpilco_env::Environment;
 use vicpilco_learn::outer::LoopSetup;
 use vicpilco_pilco::policy::Policy;
@@ -20,20 +21,14 @@ use vicpilco_pilco::policy::Policy;
 /// What `vicpilco evaluate` reads and writes.
 #[derive(Clone, Debug)]
 pub struct EvaluateOptions {
-    /// The recorded run's seed (the starts are drawn from it, as the final evaluation's are).
-    pub seed: u64,
-    /// The recorded run's directory (read only).
-    pub from: PathBuf,
-    /// The run's settings (`--config` file, or the shipped ones); they must be the run's.
-    pub config: Option<PathBuf>,
-    /// The recorded run was a `--quick` one.
-    pub quick: bool,
+    /// The recorded run (the starts are drawn from its seed, as the final evaluation's are),
+    /// its settings, which must be the run's, and the JSON-lines file of the results, one
+    /// line per update.
+    pub run: RecordedRunOptions,
     /// The updates whose policies to evaluate (0: the untrained policy); `None`: every one.
     pub updates: Option<Vec<usize>>,
     /// Fresh starts per policy; `None`: the config's `vilta.evaluation_starts`.
     pub starts: Option<usize>,
-    /// JSON-lines file of the results, one line per update (must not exist).
-    pub out: PathBuf,
 }
 
 /// One fresh start's roll-out, summarised.
@@ -62,8 +57,8 @@ pub struct UpdateEvaluation {
     pub starts: Vec<StartOutcome>,
 }
 
-/// Evaluate the chosen updates' policies of the recorded run `opts.from` of experiment `name`
-/// from fresh starts; write one JSON line per update to `opts.out` as each is done, and return
+/// Evaluate the chosen updates' policies of the recorded run `opts.run.from` of experiment `name`
+/// from fresh starts; write one JSON line per update to `opts.run.out` as each is done, and return
 /// them. The run's settings must equal the config's (all but the number of updates), so the
 /// starts, the simulator and the success test are the run's own; the last update's line then
 /// repeats the run's `final_eval.jsonl`.
@@ -71,16 +66,16 @@ pub fn evaluate(
     name: &str,
     opts: &EvaluateOptions,
 ) -> Result<Vec<UpdateEvaluation>, ExperimentError> {
-    let cfg = recorded_arm_config(name, opts.config.as_deref(), opts.quick, "evaluate")?;
+    let cfg = recorded_arm_config(name, opts.run.config.as_deref(), opts.run.quick, "evaluate")?;
     let n = opts
         .starts
         .or_else(|| cfg.vilta.as_ref().map(|v| v.evaluation_starts))
         .filter(|&n| n > 0)
         .ok_or_else(|| ExperimentError::Evaluate {
-            path: opts.from.clone(),
+            path: opts.run.from.clone(),
             message: format!("`{name}` has no evaluation starts: give their number (--starts N)"),
         })?;
-    let checkpoint = read_checkpoint(&opts.from, name, opts.seed, &arm_identity(&cfg)?)?;
+    let checkpoint = read_checkpoint(&opts.run.from, name, opts.run.seed, &arm_identity(&cfg)?)?;
     let completed = checkpoint.state.completed;
     let updates = match &opts.updates {
         None => (0..=completed).collect(),
@@ -88,23 +83,26 @@ pub fn evaluate(
     };
     if let Some(&u) = updates.iter().find(|&&u| u > completed) {
         return Err(ExperimentError::Evaluate {
-            path: opts.from.clone(),
+            path: opts.run.from.clone(),
             message: format!("the run has updates 0 to {completed}, not update {u}"),
         });
     }
     // A missing or unreadable policy is this command's failure, not a replay's.
-    let policies = crate::replay::read_policies(&opts.from, completed).map_err(|e| match e {
-        ExperimentError::Replay { path, message } => ExperimentError::Evaluate { path, message },
-        e => e,
-    })?;
+    let policies =
+        crate::replay::read_policies(&opts.run.from, completed).map_err(|e| match e {
+            ExperimentError::Replay { path, message } => {
+                ExperimentError::Evaluate { path, message }
+            }
+            e => e,
+        })?;
     let chosen: Vec<(usize, &[f64])> = updates.iter().map(|&u| (u, &policies[u][..])).collect();
     subnormals::run_flushed(|| match cfg.policy.kind {
         PolicyKind::Rbf => {
-            let policy = arm::rbf_policy(&cfg, opts.seed)?;
+            let policy = arm::rbf_policy(&cfg, opts.run.seed)?;
             each_update(&cfg, policy, &chosen, n, opts)
         }
         PolicyKind::Linear => {
-            let policy = arm::linear_policy(&cfg, opts.seed)?;
+            let policy = arm::linear_policy(&cfg, opts.run.seed)?;
             each_update(&cfg, policy, &chosen, n, opts)
         }
     })
@@ -118,16 +116,16 @@ fn each_update<P: Policy + Clone + Sync>(
     opts: &EvaluateOptions,
 ) -> Result<Vec<UpdateEvaluation>, ExperimentError> {
     use std::io::Write;
-    let (setup, mut env) = arm::setup(cfg, policy, opts.seed)?;
-    let mut file = crate::record::create_new(&opts.out)?;
+    let (setup, mut env) = arm::setup(cfg, policy, opts.run.seed)?;
+    let mut file = crate::record::create_new(&opts.run.out)?;
     let mut policy = setup.policy.clone();
     let mut results = Vec::with_capacity(chosen.len());
     for &(update, params) in chosen {
         policy.set_params(params)?;
-        let result = evaluate_policy(&setup, &mut env, &policy, update, n, opts.seed)?;
+        let result = evaluate_policy(&setup, &mut env, &policy, update, n, opts.run.seed)?;
         let line = serde_json::to_string(&result).map_err(|e| ExperimentError::Write(e.into()))?;
         writeln!(file, "{line}").map_err(|e| ExperimentError::Io {
-            path: opts.out.clone(),
+            path: opts.run.out.clone(),
             source: e,
         })?;
         results.push(result);

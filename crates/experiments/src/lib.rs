@@ -309,17 +309,17 @@ pub(crate) fn arm_identity(cfg: &ArmExperiment) -> Result<serde_json::Value, Exp
     .map_err(|e| ExperimentError::Write(e.into()))
 }
 
-/// What `vicpilco rescore` reads and writes.
+/// A recorded arm run that a command reads (`rescore`, `evaluate`), and the file it writes.
 #[derive(Clone, Debug)]
-pub struct RescoreOptions {
+pub struct RecordedRunOptions {
     /// The recorded run's seed.
     pub seed: u64,
     /// The recorded run's directory (read only).
     pub from: PathBuf,
-    /// The settings (`--config` file, or the shipped ones): the recorded run's but for
-    /// `gp.model_selection`, which names the rule reported as `other`.
+    /// The run's settings (`--config` file, or the shipped ones). `rescore` accepts a
+    /// `gp.model_selection` other than the run's: it names the rule reported as `other`.
     pub config: Option<PathBuf>,
-    /// The JSON-lines file of verdicts, one line per update with a choice (must not exist).
+    /// The JSON-lines file the command writes, one line per update (must not exist).
     pub out: PathBuf,
     /// The recorded run was a `--quick` one (its settings are then the quick ones).
     pub quick: bool,
@@ -349,7 +349,7 @@ pub(crate) fn recorded_arm_config(
 /// floating-point mode as the run ([`subnormals`]).
 pub fn rescore(
     name: &str,
-    opts: &RescoreOptions,
+    opts: &RecordedRunOptions,
 ) -> Result<Vec<vicpilco_learn::replay::ReplayedUpdate>, ExperimentError> {
     let cfg = recorded_arm_config(name, opts.config.as_deref(), opts.quick, "rescore")?;
     let identity = arm_identity(&cfg)?;

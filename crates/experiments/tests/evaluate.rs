@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 use vicpilco_experiments::evaluate::{evaluate, EvaluateOptions};
-use vicpilco_experiments::{run, ExperimentError, RunOptions};
+use vicpilco_experiments::{run, ExperimentError, RecordedRunOptions, RunOptions};
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("vicpilco-evaluate-{}-{name}", std::process::id()));
@@ -26,13 +26,15 @@ fn initial_only_run(dir: &Path) {
 
 fn options(from: &Path, out: PathBuf) -> EvaluateOptions {
     EvaluateOptions {
-        seed: 4,
-        from: from.to_path_buf(),
-        config: None,
-        quick: false,
+        run: RecordedRunOptions {
+            seed: 4,
+            from: from.to_path_buf(),
+            config: None,
+            quick: false,
+            out,
+        },
         updates: None,
         starts: None,
-        out,
     }
 }
 

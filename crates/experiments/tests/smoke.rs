@@ -2,7 +2,7 @@
 //! records every episode with finite numbers, and the same seed reproduces it exactly.
 
 use vicpilco_experiments::summary::Summary;
-use vicpilco_experiments::{rescore, run, RescoreOptions, RunOptions};
+use vicpilco_experiments::{rescore, run, RecordedRunOptions, RunOptions};
 use vicpilco_learn::replay::ReplayedUpdate;
 use vicpilco_learn::selection::ModelSelection;
 
@@ -358,7 +358,7 @@ fn replaying_a_run_keeps_its_updates_while_the_rules_agree(
     // every rule: the recorded rule's verdicts are the recorded ones, and up to the state
     // rule's parting its verdicts are those its replay found.
     let verdicts = base.join("rescored").join("verdicts.jsonl");
-    let rescore_opts = RescoreOptions {
+    let rescore_opts = RecordedRunOptions {
         seed: 1,
         from: full.to_path_buf(),
         config: Some(states.clone()),
@@ -390,7 +390,7 @@ fn replaying_a_run_keeps_its_updates_while_the_rules_agree(
     assert_eq!(lines, rescored);
     let err = rescore("vil-gic", &rescore_opts).unwrap_err().to_string();
     assert!(err.contains("verdicts.jsonl"), "{err}");
-    let classic = RescoreOptions {
+    let classic = RecordedRunOptions {
         config: None,
         ..rescore_opts.clone()
     };
