@@ -1,7 +1,7 @@
 use crate::recorded::RecordedRun;
 use anyhow::Context;
 use std::path::PathBuf;
-use vicpilco_experiments::evaluate::{evaluate, EvaluateOptions};
+use vicpilco_experiments::evaluate::{evaluate, markdown_table, table_path, EvaluateOptions};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -19,7 +19,8 @@ pub struct Args {
     #[arg(long, value_name = "N")]
     starts: Option<usize>,
     /// JSON-lines file of the results, one line per update (must not exist); default
-    /// runs/<name>-seed<S>-evaluate.jsonl.
+    /// runs/<name>-seed<S>-evaluate.jsonl. The printed table goes beside it, as FILE with the
+    /// extension `md` (must not exist either).
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
 }
@@ -34,30 +35,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let results =
         evaluate(&run.name, &opts).with_context(|| format!("evaluating {}", run.from.display()))?;
-    println!("| update | inserted | mean return | starts that fail (y0, m) |");
-    println!("|---|---|---|---|");
-    for u in &results {
-        let n = u.starts.len();
-        let mean = u.starts.iter().map(|s| s.recorded_return).sum::<f64>() / n as f64;
-        let failing: Vec<String> = u
-            .starts
-            .iter()
-            .filter(|s| !s.success)
-            .map(|s| format!("{:.3}", s.start_y))
-            .collect();
-        println!(
-            "| {} | {} of {n} | {mean:.1} | {} |",
-            u.update,
-            u.successes,
-            if failing.len() == n {
-                "all".to_string()
-            } else if failing.is_empty() {
-                "none".to_string()
-            } else {
-                failing.join(", ")
-            }
-        );
-    }
-    println!("per start: {}", out.display());
+    print!("{}", markdown_table(&results));
+    println!(
+        "per start: {}; this table: {}",
+        out.display(),
+        table_path(&out).display()
+    );
     Ok(())
 }

@@ -58,8 +58,8 @@ pub struct UpdateEvaluation {
 }
 
 /// Evaluate the chosen updates' policies of the recorded run `opts.run.from` of experiment `name`
-/// from fresh starts; write one JSON line per update to `opts.run.out` as each is done, and return
-/// them. The run's settings must equal the config's (all but the number of updates), so the
+/// from fresh starts; write one JSON line per update to `opts.run.out` as each is done, then
+/// [`markdown_table`] of them to the same path with the extension `md`, and return them. The run's settings must equal the config's (all but the number of updates), so the
 /// starts, the simulator and the success test are the run's own; the last update's line then
 /// repeats the run's `final_eval.jsonl`.
 pub fn evaluate(
@@ -117,7 +117,20 @@ fn each_update<P: Policy + Clone + Sync>(
 ) -> Result<Vec<UpdateEvaluation>, ExperimentError> {
     use std::io::Write;
     let (setup, mut env) = arm::setup(cfg, policy, opts.run.seed)?;
+    // Both files are claimed before the first roll-out, so an existing table fails at once
+    // rather than after minutes of roll-outs, and before either is created.
+    let table_path = table_path(&opts.run.out);
+    if let Some(taken) = [&opts.run.out, &table_path]
+        .into_iter()
+        .find(|p| p.exists())
+    {
+        return Err(ExperimentError::Io {
+            path: taken.clone(),
+            source: std::io::ErrorKind::AlreadyExists.into(),
+        });
+    }
     let mut file = crate::record::create_new(&opts.run.out)?;
+    let mut table = crate::record::create_new(&table_path)?;
     let mut policy = setup.policy.clone();
     let mut results = Vec::with_capacity(chosen.len());
     for &(update, params) in chosen {
@@ -130,7 +143,48 @@ fn each_update<P: Policy + Clone + Sync>(
         })?;
         results.push(result);
     }
+    table
+        .write_all(markdown_table(&results).as_bytes())
+        .map_err(|e| ExperimentError::Io {
+            path: table_path,
+            source: e,
+        })?;
     Ok(results)
+}
+
+/// Where [`evaluate`] writes its table: the JSON-lines path with the extension `md`.
+pub fn table_path(jsonl: &std::path::Path) -> std::path::PathBuf {
+    jsonl.with_extension("md")
+}
+
+/// One row per update: how many starts insert, the mean recorded return, and the start
+/// positions y0 of the starts that fail.
+pub fn markdown_table(results: &[UpdateEvaluation]) -> String {
+    let mut table = String::from(
+        "| update | inserted | mean return | starts that fail (y0, m) |\n|---|---|---|---|\n",
+    );
+    for u in results {
+        let n = u.starts.len();
+        let mean = u.starts.iter().map(|s| s.recorded_return).sum::<f64>() / n as f64;
+        let failing: Vec<String> = u
+            .starts
+            .iter()
+            .filter(|s| !s.success)
+            .map(|s| format!("{:.3}", s.start_y))
+            .collect();
+        let failing = if failing.len() == n {
+            "all".to_string()
+        } else if failing.is_empty() {
+            "none".to_string()
+        } else {
+            failing.join(", ")
+        };
+        table.push_str(&format!(
+            "| {} | {} of {n} | {mean:.1} | {failing} |\n",
+            u.update, u.successes
+        ));
+    }
+    table
 }
 
 fn evaluate_policy<P: Policy + Clone + Sync>(

@@ -3,7 +3,7 @@
 //! `policies.jsonl`, and it refuses what it cannot do with an error that names why.
 
 use std::path::{Path, PathBuf};
-use vicpilco_experiments::evaluate::{evaluate, EvaluateOptions};
+use vicpilco_experiments::evaluate::{evaluate, markdown_table, EvaluateOptions};
 use vicpilco_experiments::{run, ExperimentError, RecordedRunOptions, RunOptions};
 
 fn scratch(name: &str) -> PathBuf {
@@ -60,6 +60,14 @@ fn the_final_policy_repeats_the_final_evaluation_and_each_update_reads_its_own_p
     let written = lines(&out);
     assert_eq!(written.len(), 1);
     assert_eq!(written[0]["update"], 0);
+    let table = std::fs::read_to_string(base.join("every-update.md")).unwrap();
+    assert_eq!(table, markdown_table(&results));
+    let rows: Vec<&str> = table.lines().skip(2).collect();
+    assert_eq!(rows.len(), 1, "{table}");
+    assert!(
+        rows[0].starts_with(&format!("| 0 | {} of 20 |", results[0].successes)),
+        "{table}"
+    );
     let u = &results[0];
     assert_eq!(u.starts.len(), 20);
     for (mine, recorded) in u.starts.iter().zip(&final_eval) {
@@ -134,6 +142,20 @@ fn what_evaluate_cannot_do_is_an_error_naming_why() {
         "an earlier result is not overwritten: {m}"
     );
     assert_eq!(lines(&out).len(), 1);
+    std::fs::write(base.join("table-taken.md"), "kept").unwrap();
+    let m = message(evaluate(
+        "vilta-var",
+        &options(&run_dir, base.join("table-taken.jsonl")),
+    ));
+    assert!(m.contains("table-taken.md"), "{m}");
+    assert!(
+        !base.join("table-taken.jsonl").exists(),
+        "nothing written beside a table that exists"
+    );
+    assert_eq!(
+        std::fs::read_to_string(base.join("table-taken.md")).unwrap(),
+        "kept"
+    );
 
     let m = message(evaluate(
         "vilta",

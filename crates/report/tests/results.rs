@@ -102,3 +102,59 @@ fn covers_every_run(dirs: &[PathBuf]) {
         );
     }
 }
+
+/// A stored `evaluate.jsonl` (results/README.md) must be of the run beside it: one line per
+/// update from 0 to the last, each over the final evaluation's number of starts, the last
+/// repeating the final evaluation's count; and `evaluate.md` must have a row for each line.
+#[test]
+fn a_stored_evaluation_covers_every_update_and_repeats_the_final_one() {
+    let dirs: Vec<PathBuf> = stored_runs()
+        .into_iter()
+        .chain(probe_groups().into_iter().flatten())
+        .filter(|d| d.join("evaluate.jsonl").exists())
+        .collect();
+    for dir in stored_runs() {
+        let name = dir.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(
+            !name.starts_with("vilta-var-") || dirs.contains(&dir),
+            "{name}: results/README.md promises a stored evaluation of every vilta-var run"
+        );
+    }
+    for dir in &dirs {
+        let read = |name: &str| {
+            std::fs::read_to_string(dir.join(name))
+                .unwrap_or_else(|e| panic!("{}: {e}", dir.join(name).display()))
+        };
+        let summary: serde_json::Value = serde_json::from_str(&read("summary.json")).unwrap();
+        let final_eval = &summary["final_eval"];
+        let starts = final_eval["starts"].as_u64().expect("final_eval.starts");
+        let lines: Vec<serde_json::Value> = read("evaluate.jsonl")
+            .lines()
+            .map(|l| serde_json::from_str(l).expect("an evaluate.jsonl line"))
+            .collect();
+        let updates = summary["episodes"].as_array().expect("episodes").len();
+        assert_eq!(
+            lines.len(),
+            updates + 1,
+            "{}: updates 0..={updates}",
+            dir.display()
+        );
+        for (u, line) in lines.iter().enumerate() {
+            assert_eq!(line["update"].as_u64(), Some(u as u64), "{}", dir.display());
+            assert_eq!(
+                line["starts"].as_array().map(|s| s.len() as u64),
+                Some(starts),
+                "{} update {u}",
+                dir.display()
+            );
+        }
+        assert_eq!(
+            lines[updates]["successes"],
+            final_eval["successes"],
+            "{}: the last update is the final policy",
+            dir.display()
+        );
+        let table = read("evaluate.md");
+        assert_eq!(table.lines().count(), 2 + lines.len(), "{}", dir.display());
+    }
+}
