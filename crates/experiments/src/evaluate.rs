@@ -59,9 +59,10 @@ pub struct UpdateEvaluation {
 
 /// Evaluate the chosen updates' policies of the recorded run `opts.run.from` of experiment `name`
 /// from fresh starts; write one JSON line per update to `opts.run.out` as each is done, then
-/// [`markdown_table`] of them to the same path with the extension `md`, and return them. The run's settings must equal the config's (all but the number of updates), so the
-/// starts, the simulator and the success test are the run's own; the last update's line then
-/// repeats the run's `final_eval.jsonl`.
+/// [`markdown_table`] of them to [`table_path`], and return them. The run's settings must
+/// equal the config's (all but the number of updates), so the starts, the simulator and the
+/// success test are the run's own; the last update's line then repeats the run's
+/// `final_eval.jsonl`.
 pub fn evaluate(
     name: &str,
     opts: &EvaluateOptions,
