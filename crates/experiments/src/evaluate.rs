@@ -118,8 +118,10 @@ fn each_update<P: Policy + Clone + Sync>(
 ) -> Result<Vec<UpdateEvaluation>, ExperimentError> {
     use std::io::Write;
     let (setup, mut env) = arm::setup(cfg, policy, opts.run.seed)?;
-    // Both files are claimed before the first roll-out, so an existing table fails at once
-    // rather than after minutes of roll-outs, and before either is created.
+    // Both paths are checked before the first roll-out, so an existing table fails at once
+    // rather than after minutes of roll-outs. The table itself is created only once every
+    // update is done, so an evaluation that fails part-way leaves its JSON lines and no
+    // empty table beside them.
     let table_path = table_path(&opts.run.out);
     if let Some(taken) = [&opts.run.out, &table_path]
         .into_iter()
@@ -131,7 +133,6 @@ fn each_update<P: Policy + Clone + Sync>(
         });
     }
     let mut file = crate::record::create_new(&opts.run.out)?;
-    let mut table = crate::record::create_new(&table_path)?;
     let mut policy = setup.policy.clone();
     let mut results = Vec::with_capacity(chosen.len());
     for &(update, params) in chosen {
@@ -144,7 +145,7 @@ fn each_update<P: Policy + Clone + Sync>(
         })?;
         results.push(result);
     }
-    table
+    crate::record::create_new(&table_path)?
         .write_all(markdown_table(&results).as_bytes())
         .map_err(|e| ExperimentError::Io {
             path: table_path,
