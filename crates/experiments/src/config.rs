@@ -299,6 +299,34 @@ pub struct ViltaConfig {
     /// absent: unbounded, as issue 5). See `ActionMode::Vilta::max_lead` and EXPERIMENTS.md.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_lead: Option<f64>,
+    /// Which update's policy the run hands over and evaluates from the fresh starts:
+    /// `"last"` (PILCO, the default) or `"most-successful"` (ours). It acts after learning
+    /// only, so it is not part of a run's identity and a finished run can be evaluated again
+    /// under the other rule with `--resume`.
+    #[serde(default, skip_serializing_if = "FinalPolicy::is_last")]
+    pub final_policy: FinalPolicy,
+}
+
+/// Which policy of a run is its result (`vilta.final_policy`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FinalPolicy {
+    /// The last update's policy.
+    #[default]
+    Last,
+    /// The policy of the update whose own roll-outs inserted most often, the latest of equals
+    /// (ours). The learner can tell: it records whether each of its roll-outs inserted. A
+    /// jammed insertion and standing still both cost about 1 per step, so the cost alone does
+    /// not keep the learner from trading an inserting policy for a worse one
+    /// (EXPERIMENTS.md, twenty-second session); this rule keeps the best it has seen.
+    MostSuccessful,
+}
+
+impl FinalPolicy {
+    /// The default (serialised configs omit it).
+    pub fn is_last(&self) -> bool {
+        *self == FinalPolicy::Last
+    }
 }
 
 /// The config text and file label of a shipped name (aliases resolved).
@@ -563,6 +591,14 @@ impl ArmExperiment {
                     if let Some(d) = v.max_lead {
                         c.positive("vilta.max_lead", d)?;
                     }
+                    if !v.final_policy.is_last() && v.evaluation_starts == 0 {
+                        return Err(c.fail(
+                            "vilta.final_policy",
+                            "chooses the policy the fresh starts evaluate, and \
+                             vilta.evaluation_starts is 0"
+                                .into(),
+                        ));
+                    }
                 }
             }
         }
@@ -613,6 +649,13 @@ impl ArmExperiment {
         }
         if self.vilta.as_ref().is_some_and(|v| v.max_lead.is_some()) {
             keys.push("vilta.max_lead");
+        }
+        if self
+            .vilta
+            .as_ref()
+            .is_some_and(|v| !v.final_policy.is_last())
+        {
+            keys.push("vilta.final_policy");
         }
         if self.controller == ControllerKind::Sic && self.policy.kind == PolicyKind::Rbf {
             keys.push("policy.n_basis");

@@ -30,7 +30,7 @@ pub mod replay;
 pub mod subnormals;
 pub mod summary;
 
-use config::{ArmExperiment, PolicyKind};
+use config::{ArmExperiment, FinalPolicy, PolicyKind};
 use record::{open_jsonl, read_checkpoint, ClaimsOf, PredictionLabels, Recorder, RolloutExtras};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -300,13 +300,16 @@ fn run_arm(
 }
 
 /// The settings a resumed or replayed arm run must share with its record: all but the number
-/// of updates.
+/// of updates and `vilta.final_policy`, which acts only after the last update.
 pub(crate) fn arm_identity(cfg: &ArmExperiment) -> Result<serde_json::Value, ExperimentError> {
-    serde_json::to_value(ArmExperiment {
+    let mut shared = ArmExperiment {
         episodes: 0,
         ..cfg.clone()
-    })
-    .map_err(|e| ExperimentError::Write(e.into()))
+    };
+    if let Some(v) = shared.vilta.as_mut() {
+        v.final_policy = FinalPolicy::Last;
+    }
+    serde_json::to_value(shared).map_err(|e| ExperimentError::Write(e.into()))
 }
 
 /// A recorded arm run that a command reads (`rescore`, `evaluate`), and the file it writes.

@@ -169,6 +169,10 @@ pub struct FinalEval {
     pub starts: usize,
     pub successes: usize,
     pub fraction: f64,
+    /// The update whose policy was evaluated (`vilta.final_policy`); absent in summaries
+    /// written before the rule, which evaluated the last update's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub update: Option<usize>,
 }
 
 /// Consecutive successful updates that count as "solved".

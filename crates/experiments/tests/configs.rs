@@ -426,3 +426,41 @@ fn force_width_far_is_an_optional_width_wider_than_force_width() {
         assert!(e.contains("cost.force_width_far"), "{bad}: {e}");
     }
 }
+
+#[test]
+fn vilta_var_hands_over_its_most_successful_policy_and_only_runs_with_fresh_starts_may_choose() {
+    use config::FinalPolicy;
+    let var = shipped("vilta-var");
+    assert_eq!(
+        var.vilta.as_ref().unwrap().final_policy,
+        FinalPolicy::MostSuccessful
+    );
+    assert!(var.ours_keys().contains(&"vilta.final_policy"));
+    let fixed = shipped("vilta");
+    assert_eq!(
+        fixed.vilta.as_ref().unwrap().final_policy,
+        FinalPolicy::Last
+    );
+    assert!(!fixed.ours_keys().contains(&"vilta.final_policy"));
+    // Not written when "last", so runs made before the key keep their identity.
+    let written = serde_json::to_value(&fixed).unwrap();
+    assert!(written["vilta"].get("final_policy").is_none(), "{written}");
+
+    let text = config::shipped("vilta").unwrap().1;
+    let set = |value: &str| {
+        with_line_after(
+            text,
+            "rollouts_per_iteration = 1",
+            &format!("final_policy = {value}"),
+        )
+    };
+    let last = config::parse(&set("\"last\""), "test.toml").unwrap();
+    assert_eq!(last, fixed);
+    for bad in ["\"most-successful\"", "\"best\""] {
+        let err = error_of(&set(bad));
+        assert!(
+            err.contains("final_policy") && err.contains("test.toml"),
+            "{bad}: {err}"
+        );
+    }
+}

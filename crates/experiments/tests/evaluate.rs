@@ -189,3 +189,86 @@ fn what_evaluate_cannot_do_is_an_error_naming_why() {
     );
     let _ = std::fs::remove_dir_all(&base);
 }
+
+/// `vilta.final_policy = "most-successful"` hands over the policy of the latest update whose own
+/// roll-outs inserted most often; the rule acts after learning only, so a finished run takes
+/// it on `--resume` and its final evaluation is then that update's `vicpilco evaluate` line.
+#[test]
+fn the_most_successful_rule_evaluates_the_best_update_also_of_a_finished_run() {
+    let base = scratch("most-successful");
+    let run_dir = base.join("run");
+    let shipped = vicpilco_experiments::config::shipped("vilta-var")
+        .unwrap()
+        .1;
+    let rule_line = "final_policy = \"most-successful\"";
+    assert!(shipped.contains(rule_line), "vilta-var ships the rule");
+    let last_config = base.join("last.toml");
+    std::fs::create_dir_all(&base).unwrap();
+    std::fs::write(
+        &last_config,
+        shipped.replace(rule_line, "final_policy = \"last\""),
+    )
+    .unwrap();
+    let opts = RunOptions {
+        seed: 4,
+        out: run_dir.clone(),
+        episodes: Some(2),
+        quick: true,
+        config: Some(last_config),
+        ..Default::default()
+    };
+    let summary = run("vilta-var", &opts, &mut ()).expect("2 quick updates");
+    assert_eq!(summary.final_eval.as_ref().unwrap().update, Some(2));
+
+    // As if update 1's roll-outs had all inserted (a quick run's seldom do): the rule now
+    // prefers update 1 to the last.
+    let checkpoint = run_dir.join("checkpoint.json");
+    let mut c: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&checkpoint).unwrap()).unwrap();
+    c["summary"]["episodes"][0]["success_fraction"] = serde_json::json!(1.0);
+    c["summary"]["episodes"][1]["success_fraction"] = serde_json::json!(0.75);
+    std::fs::write(&checkpoint, c.to_string()).unwrap();
+    let resumed = run(
+        "vilta-var",
+        &RunOptions {
+            config: None,
+            resume: true,
+            ..opts
+        },
+        &mut (),
+    )
+    .expect("the finished run resumed under the shipped rule");
+    let final_eval = resumed.final_eval.unwrap();
+    assert_eq!(final_eval.update, Some(1));
+    assert_eq!(resumed.episodes.len(), 2, "no update added");
+    assert!(resumed.config["ours"]
+        .as_array()
+        .unwrap()
+        .contains(&serde_json::json!("vilta.final_policy")));
+
+    let quick_update = |u: usize| {
+        let mut o = options(&run_dir, base.join(format!("update-{u}.jsonl")));
+        o.run.quick = true;
+        o.updates = Some(vec![u]);
+        evaluate("vilta-var", &o).unwrap()
+    };
+    let mut evaluated = quick_update(1);
+    let update_1 = evaluated.remove(0);
+    assert_eq!(update_1.successes, final_eval.successes);
+    let recorded = lines(&run_dir.join("final_eval.jsonl"));
+    assert_eq!(recorded.len(), update_1.starts.len());
+    let mut differs_from_last = false;
+    let last = quick_update(2);
+    for ((mine, line), other) in update_1.starts.iter().zip(&recorded).zip(&last[0].starts) {
+        let states = line["rollout"]["true_states"].as_array().unwrap();
+        let end = states.last().unwrap();
+        assert_eq!(mine.final_position[0], end[0].as_f64().unwrap());
+        assert_eq!(mine.final_position[1], end[1].as_f64().unwrap());
+        differs_from_last |= other.final_position != mine.final_position;
+    }
+    assert!(
+        differs_from_last,
+        "update 2's policy would have ended elsewhere"
+    );
+    let _ = std::fs::remove_dir_all(&base);
+}

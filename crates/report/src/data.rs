@@ -117,6 +117,9 @@ pub(crate) struct Summary {
     pub thesis_reference: Option<Vec<Claim>>,
     /// Arm runs: mean (k_x, k_y) of the last roll-out over the whole episode.
     pub final_mean_gains: Option<[f64; 2]>,
+    /// The update whose policy `final_eval.jsonl` rolled out (absent in summaries written
+    /// before `vilta.final_policy`, whose final evaluation is the last update's).
+    pub final_eval_update: Option<u64>,
     /// Each invocation of the run (empty in summaries written before they were recorded).
     pub sessions: Vec<Session>,
     /// A run started with `--replay-from`: the recorded run its first updates are.

@@ -214,12 +214,19 @@ fn final_eval(run: &Run, out: &mut Out, notes: &mut Vec<String>) -> Result<(), R
     out.add(
         &FinalEvalPlot {
             evals,
+            update: run.summary.final_eval_update,
             geometry: run.summary.geometry.as_ref(),
             dt,
         },
         "final_eval",
-        "The final policy from fresh start positions: y(t) of each roll-out, green if it \
-         inserts, red if not."
-            .into(),
+        match run.summary.final_eval_update {
+            Some(u) => format!(
+                "The final policy (update {u}'s, chosen by vilta.final_policy) from fresh start \
+                 positions: y(t) of each roll-out, green if it inserts, red if not."
+            ),
+            None => "The final policy from fresh start positions: y(t) of each roll-out, green \
+                     if it inserts, red if not."
+                .into(),
+        },
     )
 }

@@ -36,6 +36,10 @@ pub(super) fn parse_summary(n: Node<'_>) -> Result<Summary, ReportError> {
             t.map(|t| t.map_array(parse_claim)).transpose()
         })?,
         final_mean_gains: n.with("final_mean_gains", |g| g.map(parse_pair).transpose())?,
+        final_eval_update: n.with("final_eval", |e| match e {
+            None => Ok(None),
+            Some(e) => e.opt_u64("update"),
+        })?,
         sessions: n.with("sessions", |s| {
             s.map(|s| s.map_array(parse_session))
                 .transpose()

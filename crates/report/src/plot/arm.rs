@@ -201,6 +201,8 @@ impl Scene<'_> {
 
 pub(crate) struct FinalEvalPlot<'a> {
     pub evals: &'a [FinalEval],
+    /// The update whose policy this is, when the summary names it.
+    pub update: Option<u64>,
     pub geometry: Option<&'a Geometry>,
     /// Without a time step the x axis counts steps.
     pub dt: Option<f64>,
@@ -233,7 +235,12 @@ impl Figure for FinalEvalPlot<'_> {
         let y = range(ys.chain(hole.map(|h| [h.0, h.1]).unwrap_or_default()), 0.08);
         let n = curves.len();
         let ok = curves.iter().filter(|c| c.0).count();
-        let title = format!("Final policy from {n} fresh starts: {ok} of {n} insert");
+        let title = match self.update {
+            Some(u) => {
+                format!("Final policy (update {u}) from {n} fresh starts: {ok} of {n} insert")
+            }
+            None => format!("Final policy from {n} fresh starts: {ok} of {n} insert"),
+        };
         let mut axes = Axes {
             title: &title,
             x,
