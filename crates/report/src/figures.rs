@@ -71,7 +71,17 @@ pub(crate) fn draw_all(
 
     let preds = run.predictions.as_deref().unwrap_or_default();
     if let (Some(first), Some(last)) = (preds.first(), preds.last()) {
-        policy(run, last, &mut out, notes)?;
+        // The final policy is the one the final evaluation chose (`vilta.final_policy`), else
+        // the last update's.
+        let chosen = s
+            .final_eval_update
+            .and_then(|u| preds.iter().find(|p| p.episode == u));
+        if let (Some(u), None) = (s.final_eval_update, chosen) {
+            notes.push(format!(
+                "no prediction of update {u}, the final evaluation's: policy plot of the last update"
+            ));
+        }
+        policy(run, chosen.unwrap_or(last), &mut out, notes)?;
         for (which, p) in [("first", first), ("last", last)] {
             prediction(run, which, p, &mut out, notes)?;
         }
@@ -85,16 +95,16 @@ pub(crate) fn draw_all(
 
 fn policy(
     run: &Run,
-    last: &Prediction,
+    shown: &Prediction,
     out: &mut Out,
     notes: &mut Vec<String>,
 ) -> Result<(), ReportError> {
-    let final_rollout = run.rollout_of(last.episode);
+    let final_rollout = run.rollout_of(shown.episode);
     let initial = run.rollout_of(0);
     if run.rollouts.is_some() && final_rollout.is_none() {
         notes.push(format!(
             "no roll-out of update {} recorded: policy plot without its applied actions",
-            last.episode
+            shown.episode
         ));
     }
     if run.rollouts.is_some() && initial.is_none() {
@@ -102,7 +112,7 @@ fn policy(
     }
     out.add(
         &Policy {
-            pred: last,
+            pred: shown,
             last: final_rollout,
             initial,
         },
@@ -111,8 +121,8 @@ fn policy(
             "Final policy (update {}): predicted action distribution (mean ± 2σ{}) over time, \
              with the actions applied in that update's roll-out and in the initial exploration \
              roll-out.",
-            last.episode,
-            if last.action_bounds.is_some() {
+            shown.episode,
+            if shown.action_bounds.is_some() {
                 ", clipped to the saturation range"
             } else {
                 ""

@@ -120,6 +120,48 @@ fn vilta_var_adds_final_eval_and_yellow_updates() {
     assert!(page.contains("start_y_range"));
 }
 
+/// With `final_eval.update` (`vilta.final_policy`) the policy plot and the final evaluation are
+/// of that update, also when it is not the last; a named update without a prediction falls
+/// back to the last with a note.
+#[test]
+fn the_final_policy_plots_show_the_update_the_final_evaluation_chose() {
+    let tmp = TempDir::new("vilta-var-chosen");
+    write_run(tmp.path(), Kind::ViltaVar);
+    let summary = tmp.path().join("summary.json");
+    edit_json(
+        &summary,
+        |v| {
+            v["final_eval"] =
+                serde_json::json!({"starts": 20, "successes": 17, "fraction": 0.85, "update": 3})
+        },
+    );
+    let files = write_report(tmp.path()).unwrap();
+    assert!(files.notes.is_empty(), "{:?}", files.notes);
+    let page = html(tmp.path());
+    assert!(page.contains("Final policy (update 3)"), "policy caption");
+    assert!(
+        page.contains(&crate::html::esc(
+            "update 3's, chosen by vilta.final_policy"
+        )),
+        "final_eval caption"
+    );
+    assert!(!page.contains("Final policy (update 5)"));
+
+    edit_json(&summary, |v| {
+        v["final_eval"]["update"] = serde_json::json!(9)
+    });
+    let files = write_report(tmp.path()).unwrap();
+    assert!(
+        files
+            .notes
+            .iter()
+            .any(|n| n.contains("no prediction of update 9")),
+        "{:?}",
+        files.notes
+    );
+    assert!(html(tmp.path()).contains("Final policy (update 5)"));
+}
+
 #[test]
 fn pendulum_run_has_no_arm_plots() {
     let tmp = TempDir::new("pendulum");
