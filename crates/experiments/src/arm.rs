@@ -339,9 +339,24 @@ pub fn rbf_policy(cfg: &ArmExperiment, seed: u64) -> Result<RbfPolicy, Experimen
         [r.x[0], r.x[1], r.xd[0], r.xd[1]][k]
     });
     let mut rng = rand::rngs::ChaCha8Rng::seed_from_u64(derive_seed(seed, 0, PURPOSE_POLICY_INIT));
-    let targets = Mat::from_fn(n, m, |_, _| {
+    let mut targets = Mat::from_fn(n, m, |_, _| {
         cfg.policy.init_std * Distribution::<f64>::sample(&StandardNormal, &mut rng)
     });
+    if let (true, Some(v)) = (cfg.policy.init_from_scan, &cfg.vilta) {
+        // The search roll-out's increment per tick over the step centred on each centre's
+        // time, as `explore_policy` sends it, taken back through the actions' saturation.
+        let ticks_per_step = cfg.dt / v.delta_tick;
+        let range = SatRange::Symmetric {
+            a_max: cfg.policy.delta_max.unwrap_or(0.0),
+        };
+        for i in 0..n {
+            let t = t_end * (i as f64 + 0.5) / n as f64;
+            let (a, b) = (path(t - 0.5 * cfg.dt), path(t + 0.5 * cfg.dt));
+            for axis in 0..2 {
+                targets[(i, 2 + axis)] = range.preimage((b.x[axis] - a.x[axis]) / ticks_per_step);
+            }
+        }
+    }
     let ls = cfg.policy.lengthscales.unwrap_or([1.0; 4]);
     let log_ls = Mat::from_fn(4, m, |k, _| ls[k].ln());
     Ok(RbfPolicy::new(

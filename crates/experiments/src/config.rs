@@ -130,6 +130,12 @@ pub struct PolicyConfig {
     /// RBF signal-to-noise ratio σ_f/σ_n (SNR 100: noise 0.01²).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub snr: Option<f64>,
+    /// VILTA, RBF (ours, off unless set): the initial policy's reference increments are the
+    /// search roll-out's at each centre (the centres lie on its path), not `init_std · randn`,
+    /// so the first optimisation starts from a policy that moves towards the wall. The gains'
+    /// pseudo-targets stay random. See EXPERIMENTS.md, twenty-second session.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub init_from_scan: bool,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -553,6 +559,12 @@ impl ArmExperiment {
                 c.forbid("vilta", &self.vilta, "to a VIL run")?;
                 c.forbid("policy.delta_max", &p.delta_max, "to a VIL run")?;
                 c.forbid("initial.scan", &self.initial.scan, "to a VIL run")?;
+                if p.init_from_scan {
+                    return Err(c.fail(
+                        "policy.init_from_scan",
+                        "sets the reference increments of a VILTA run, not a VIL one".into(),
+                    ));
+                }
                 c.forbid(
                     "initial.scan_jitter",
                     &self.initial.scan_jitter,
@@ -579,6 +591,12 @@ impl ArmExperiment {
                             format!("times must increase: entry {} at t = {}", i + 1, w[1][0]),
                         ));
                     }
+                }
+                if p.init_from_scan && p.kind != PolicyKind::Rbf {
+                    return Err(c.fail(
+                        "policy.init_from_scan",
+                        "needs an RBF policy, whose centres lie on the scan".into(),
+                    ));
                 }
                 if let Some(j) = &self.initial.scan_jitter {
                     c.positive("initial.scan_jitter.std", j.std)?;
@@ -640,6 +658,9 @@ impl ArmExperiment {
         }
         if self.gp.model_selection != ModelSelection::Likelihood {
             keys.push("gp.model_selection");
+        }
+        if self.policy.init_from_scan {
+            keys.push("policy.init_from_scan");
         }
         if !self.sensor_noise {
             keys.push("sensor_noise");

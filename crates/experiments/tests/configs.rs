@@ -464,3 +464,64 @@ fn vilta_var_hands_over_its_most_successful_policy_and_only_runs_with_fresh_star
         );
     }
 }
+
+/// `policy.init_from_scan` makes the untrained VILTA policy send, at each RBF centre, the
+/// reference increments the search roll-out sends there; the gains stay the random ones.
+#[test]
+fn init_from_scan_starts_the_policy_on_the_search_roll_outs_increments() {
+    let base = shipped("vilta");
+    assert!(!base.policy.init_from_scan);
+    assert!(!base.ours_keys().contains(&"policy.init_from_scan"));
+    let text = config::shipped("vilta").unwrap().1;
+    let set = |name: &str, value: &str| {
+        with_line_after(
+            config::shipped(name).unwrap().1,
+            "snr = 100.0",
+            &format!("init_from_scan = {value}"),
+        )
+    };
+    assert!(text.contains("snr = 100.0"));
+    let cfg = config::parse(&set("vilta", "true"), "test.toml").unwrap();
+    assert!(cfg.ours_keys().contains(&"policy.init_from_scan"));
+    let err = error_of(&set("vil-gic-rbf10", "true"));
+    assert!(
+        err.contains("policy.init_from_scan") && err.contains("test.toml"),
+        "{err}"
+    );
+
+    let seed = 3;
+    let scanned = arm::rbf_policy(&cfg, seed).unwrap();
+    let random = arm::rbf_policy(&base, seed).unwrap();
+    let (setup, _) = arm::setup(&cfg, scanned.clone(), seed).unwrap();
+    let delta_max = cfg.policy.delta_max.unwrap();
+    // The search roll-out's increments at each step, along its own path (as the arm starts
+    // at rest on the path's first point, the observations only fix where the path begins).
+    let start = [cfg.start.state[0], cfg.start.state[1], 0.0, 0.0, 0.0, 0.0];
+    let scan: Vec<Vec<f64>> = (0..cfg.horizon)
+        .map(|t| (setup.explore)(seed, t, &start))
+        .collect();
+    let centres = scanned.centres();
+    let mut worst: f64 = 0.0;
+    let mut moved = false;
+    for i in 0..centres.nrows() {
+        let obs = [
+            centres[(i, 0)],
+            centres[(i, 1)],
+            centres[(i, 2)],
+            centres[(i, 3)],
+            0.0,
+            0.0,
+        ];
+        let a = setup.act(&scanned, None, 0, &obs);
+        let r = setup.act(&random, None, 0, &obs);
+        assert_eq!(a[..2], r[..2], "centre {i}: the gains stay the random ones");
+        // Centre i sits at t = (2i + 1) · 0.1 s, between steps 2i and 2i + 1.
+        for axis in 0..2 {
+            let want = 0.5 * (scan[2 * i][2 + axis] + scan[2 * i + 1][2 + axis]);
+            worst = worst.max((a[2 + axis] - want).abs() / delta_max);
+            moved |= want.abs() > 0.1 * delta_max;
+        }
+    }
+    assert!(moved, "the scan moves");
+    assert!(worst < 0.05, "largest error {worst} of delta_max");
+}

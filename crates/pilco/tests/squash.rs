@@ -214,3 +214,32 @@ fn invalid_definitions_are_rejected() {
     assert!(SineSat::new(2, &[0, 1], &[1.0]).is_err());
     assert!(TrigAug::new(2, &[0], &[f64::NAN]).is_err());
 }
+
+#[test]
+fn the_preimage_inverts_each_range_on_the_branch_through_zero() {
+    let ranges = [
+        SatRange::Symmetric { a_max: 0.0025 },
+        SatRange::Bounded {
+            a_min: 5.0,
+            a_max: 250.0,
+        },
+    ];
+    for r in ranges {
+        let sat = PartialSat::new(1, &[0], &[r]).unwrap();
+        let (lo, hi) = r.bounds();
+        for k in 0..=40 {
+            let u = lo + (hi - lo) * k as f64 / 40.0;
+            let x = r.preimage(u);
+            assert!(x.abs() <= FRAC_PI_2 + 1e-12, "{r:?}: {u} -> {x}");
+            let back = sat.apply(&[x])[0];
+            assert!(
+                (back - u).abs() <= 1e-9 * (hi - lo),
+                "{r:?}: {u} -> {x} -> {back}"
+            );
+        }
+        // Outside the range: the nearest bound's preimage.
+        assert_eq!(r.preimage(hi + 1.0), r.preimage(hi));
+        assert_eq!(r.preimage(lo - 1.0), r.preimage(lo));
+    }
+    assert!(SatRange::Symmetric { a_max: 1.0 }.preimage(0.0).abs() < 1e-15);
+}

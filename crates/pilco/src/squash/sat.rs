@@ -146,6 +146,18 @@ impl SatRange {
         }
     }
 
+    /// The pre-saturation value `x ∈ [−π/2, π/2]` that this range maps onto `u`, with `u`
+    /// clamped into the range: the inverse of `u = c + h σ(x)` on the branch through 0
+    /// (for setting a policy's initial outputs to chosen actions).
+    pub fn preimage(self, u: f64) -> f64 {
+        let (c, h) = self.affine();
+        let v = ((u - c) / h).clamp(-1.0, 1.0);
+        // σ(x) = (3s − s³)/2 with s = sin x (sin 3x = 3s − 4s³). The cubic s³ − 3s + 2v = 0
+        // has, with s = 2 cos φ, cos 3φ = −v; its root in [−1, 1] is the branch below.
+        let s = 2.0 * ((((-v).acos()) + 4.0 * std::f64::consts::PI) / 3.0).cos();
+        s.clamp(-1.0, 1.0).asin()
+    }
+
     /// `(offset c, half-width h)` of the affine map `u = c + h σ(x)`.
     fn affine(self) -> (f64, f64) {
         match self {
