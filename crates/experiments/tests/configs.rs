@@ -127,6 +127,15 @@ fn with_line_after(text: &str, anchor: &str, line: &str) -> String {
     text.replace(anchor, &format!("{anchor}\n{line}"))
 }
 
+/// The shipped `vilta.toml` with `line` added to its `[vilta]` table.
+fn vilta_with_vilta_line(line: &str) -> String {
+    with_line_after(
+        config::shipped("vilta").unwrap().1,
+        "rollouts_per_iteration = 1",
+        line,
+    )
+}
+
 fn error_of(text: &str) -> String {
     config::parse(text, "test.toml").unwrap_err().to_string()
 }
@@ -282,14 +291,7 @@ fn vilta_max_lead_is_unbounded_unless_set_positive_and_then_an_ours_key() {
         let written = serde_json::to_value(&base).unwrap();
         assert!(written["vilta"].get("max_lead").is_none(), "{written}");
     }
-    let text = config::shipped("vilta").unwrap().1;
-    let set = |value: &str| {
-        with_line_after(
-            text,
-            "rollouts_per_iteration = 1",
-            &format!("max_lead = {value}"),
-        )
-    };
+    let set = |value: &str| vilta_with_vilta_line(&format!("max_lead = {value}"));
     let cfg = config::parse(&set("0.05"), "test.toml").unwrap();
     assert_eq!(lead(&cfg), Some(0.05));
     assert!(cfg.ours_keys().contains(&"vilta.max_lead"));
@@ -446,14 +448,7 @@ fn vilta_var_hands_over_its_most_successful_policy_and_only_runs_with_fresh_star
     let written = serde_json::to_value(&fixed).unwrap();
     assert!(written["vilta"].get("final_policy").is_none(), "{written}");
 
-    let text = config::shipped("vilta").unwrap().1;
-    let set = |value: &str| {
-        with_line_after(
-            text,
-            "rollouts_per_iteration = 1",
-            &format!("final_policy = {value}"),
-        )
-    };
+    let set = |value: &str| vilta_with_vilta_line(&format!("final_policy = {value}"));
     let last = config::parse(&set("\"last\""), "test.toml").unwrap();
     assert_eq!(last, fixed);
     for bad in ["\"most-successful\"", "\"best\""] {
