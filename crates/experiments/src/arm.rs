@@ -406,6 +406,20 @@ pub fn inserted(r: &Rollout) -> bool {
             .unwrap_or(false)
 }
 
+/// The environment of the initial search roll-out when it differs from the updates' one:
+/// VILTA with `vilta.max_lead_in_search = false` (ours) records the search without the lead
+/// bound. `None`: the search runs on the updates' environment.
+pub fn search_env(cfg: &ArmExperiment) -> Result<Option<ArmEnv>, ExperimentError> {
+    if cfg.vilta.as_ref().is_none_or(|v| v.max_lead_in_search) {
+        return Ok(None);
+    }
+    let mut arm = arm_config(cfg);
+    if let ActionMode::Vilta { max_lead, .. } = &mut arm.mode {
+        *max_lead = None;
+    }
+    Ok(Some(ArmEnv::new(arm)?))
+}
+
 /// The learning problem with `policy` and its arm environment.
 pub fn setup<P>(
     cfg: &ArmExperiment,

@@ -220,7 +220,7 @@ where
         extras: None,
         claims: None,
     };
-    let summary = finish(name, opts, setup, &mut env, observer, meta)?.0;
+    let summary = finish(name, opts, setup, (&mut env, None), observer, meta)?.0;
     vicpilco_report::write_report(&opts.out)?;
     Ok(summary)
 }
@@ -282,14 +282,24 @@ fn run_arm(
             let policy = arm::rbf_policy(&cfg, opts.seed)?;
             let desc = format!("rbf ({} basis functions, 4 inputs)", policy.n_centres());
             let (setup, mut env) = arm::setup(&cfg, policy, opts.seed)?;
-            let (summary, outcome) = finish(name, opts, setup, &mut env, observer, meta(desc))?;
+            let mut search = arm::search_env(&cfg)?;
+            let envs = (
+                &mut env as &mut dyn Environment,
+                search.as_mut().map(|e| e as _),
+            );
+            let (summary, outcome) = finish(name, opts, setup, envs, observer, meta(desc))?;
             checks::after_run(&cfg, summary, &outcome, opts)?
         }
         PolicyKind::Linear => {
             let policy = arm::linear_policy(&cfg, opts.seed)?;
             let (setup, mut env) = arm::setup(&cfg, policy, opts.seed)?;
+            let mut search = arm::search_env(&cfg)?;
+            let envs = (
+                &mut env as &mut dyn Environment,
+                search.as_mut().map(|e| e as _),
+            );
             let desc = "linear (4 inputs)".to_string();
-            let (summary, outcome) = finish(name, opts, setup, &mut env, observer, meta(desc))?;
+            let (summary, outcome) = finish(name, opts, setup, envs, observer, meta(desc))?;
             checks::after_run(&cfg, summary, &outcome, opts)?
         }
     };
@@ -373,7 +383,7 @@ fn finish<P>(
     name: &str,
     opts: &RunOptions,
     setup: LoopSetup<P>,
-    env: &mut dyn Environment,
+    (env, initial_env): (&mut dyn Environment, Option<&mut dyn Environment>),
     observer: &mut dyn LoopObserver,
     meta: RunMeta<'_>,
 ) -> Result<(Summary, LoopOutcome<P>), ExperimentError>
@@ -458,7 +468,10 @@ where
     };
     let outcome = match checkpoint {
         Some(c) => setup.resume(env, &mut recorder, c.state)?,
-        None => setup.run(env, &mut recorder)?,
+        None => match initial_env {
+            Some(initial_env) => setup.run_with_initial_env(initial_env, env, &mut recorder)?,
+            None => setup.run(env, &mut recorder)?,
+        },
     };
     if let Some(e) = recorder.error {
         return Err(e);

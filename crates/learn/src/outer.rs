@@ -341,6 +341,44 @@ where
         env: &mut dyn Environment,
         observer: &mut dyn LoopObserver,
     ) -> Result<LoopOutcome<P>, LearnError> {
+        let data = self.initial_rollouts(env, observer)?;
+        self.continue_after_initial(data, env, observer)
+    }
+
+    /// As [`Self::run`], with the initial roll-outs recorded on `initial_env` and every
+    /// update's on `env`. For a scripted initial roll-out that needs a setting the learned
+    /// policy must not have (VILTA's search roll-out free of the reference-lead bound).
+    /// Both must agree on state and action layout, step and horizon.
+    pub fn run_with_initial_env(
+        self,
+        initial_env: &mut dyn Environment,
+        env: &mut dyn Environment,
+        observer: &mut dyn LoopObserver,
+    ) -> Result<LoopOutcome<P>, LearnError> {
+        let layout = |e: &dyn Environment| {
+            (
+                e.state_names(),
+                e.action_names(),
+                e.dt().to_bits(),
+                e.horizon(),
+            )
+        };
+        if layout(initial_env) != layout(env) {
+            return Err(LearnError::Spec(
+                "the initial roll-outs' environment differs from the updates' in its state or \
+                 action layout, step or horizon"
+                    .into(),
+            ));
+        }
+        let data = self.initial_rollouts(initial_env, observer)?;
+        self.continue_after_initial(data, env, observer)
+    }
+
+    fn initial_rollouts(
+        &self,
+        env: &mut dyn Environment,
+        observer: &mut dyn LoopObserver,
+    ) -> Result<Vec<Rollout>, LearnError> {
         let mut data: Vec<Rollout> = Vec::new();
         for i in 0..self.initial_rollouts {
             observer.phase(0, Phase::InitialRollout);
@@ -359,6 +397,15 @@ where
             observer.rollout_done(0, &r, &self.recorded_costs(&r));
             data.push(r);
         }
+        Ok(data)
+    }
+
+    fn continue_after_initial(
+        self,
+        data: Vec<Rollout>,
+        env: &mut dyn Environment,
+        observer: &mut dyn LoopObserver,
+    ) -> Result<LoopOutcome<P>, LearnError> {
         let initial = data.clone();
         let state = LoopState {
             completed: 0,

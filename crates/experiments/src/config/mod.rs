@@ -102,11 +102,11 @@ pub struct ArmExperiment {
     /// force axis). Every shipped config keeps it on; `false` is a diagnostic (ours) that
     /// shows how much of a run's behaviour the measurement noise in the GP's inputs and
     /// targets causes (EXPERIMENTS.md, "Runs without sensor noise").
-    #[serde(default = "sensor_noise_on", skip_serializing_if = "is_on")]
+    #[serde(default = "on", skip_serializing_if = "is_on")]
     pub sensor_noise: bool,
 }
 
-fn sensor_noise_on() -> bool {
+fn on() -> bool {
     true
 }
 
@@ -310,6 +310,13 @@ pub struct ViltaConfig {
     /// absent: unbounded, as issue 5). See `ActionMode::Vilta::max_lead` and EXPERIMENTS.md.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_lead: Option<f64>,
+    /// Whether `max_lead` also bounds the initial search roll-out (the default). `false`
+    /// (ours) records the search without the bound and only the learned policy's roll-outs
+    /// with it: the bound slows only increments that push the lead out, so a jittered scan
+    /// under it ratchets its reference back from the wall and never inserts (probe
+    /// `scan-jitter-lead`, EXPERIMENTS.md).
+    #[serde(default = "on", skip_serializing_if = "is_on")]
+    pub max_lead_in_search: bool,
     /// Which update's policy the run hands over and evaluates from the fresh starts:
     /// `"last"` (PILCO, the default) or `"most-successful"` (ours). It acts after learning
     /// only, so it is not part of a run's identity and a finished run can be evaluated again
@@ -416,6 +423,9 @@ impl ArmExperiment {
         }
         if self.vilta.as_ref().is_some_and(|v| v.max_lead.is_some()) {
             keys.push("vilta.max_lead");
+        }
+        if self.vilta.as_ref().is_some_and(|v| !v.max_lead_in_search) {
+            keys.push("vilta.max_lead_in_search");
         }
         if self
             .vilta

@@ -250,6 +250,13 @@ impl ArmExperiment {
                     if let Some(d) = v.max_lead {
                         c.positive("vilta.max_lead", d)?;
                     }
+                    if !v.max_lead_in_search && v.max_lead.is_none() {
+                        return Err(c.fail(
+                            "vilta.max_lead_in_search",
+                            "exempts the search roll-out from vilta.max_lead, which is not set"
+                                .into(),
+                        ));
+                    }
                     if !v.final_policy.is_last() && v.evaluation_starts == 0 {
                         return Err(c.fail(
                             "vilta.final_policy",
