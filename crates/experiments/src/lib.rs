@@ -220,7 +220,7 @@ where
         extras: None,
         claims: None,
     };
-    let summary = finish(name, opts, setup, (&mut env, None), observer, meta)?.0;
+    let summary = finish(name, opts, setup, &mut env, None, observer, meta)?.0;
     vicpilco_report::write_report(&opts.out)?;
     Ok(summary)
 }
@@ -277,29 +277,38 @@ fn run_arm(
             checks::thesis_checks(name, &cfg, planned, s)
         })),
     };
+    let mut search = arm::search_env(&cfg)?;
     let mut summary = match cfg.policy.kind {
         PolicyKind::Rbf => {
             let policy = arm::rbf_policy(&cfg, opts.seed)?;
             let desc = format!("rbf ({} basis functions, 4 inputs)", policy.n_centres());
             let (setup, mut env) = arm::setup(&cfg, policy, opts.seed)?;
-            let mut search = arm::search_env(&cfg)?;
-            let envs = (
-                &mut env as &mut dyn Environment,
-                search.as_mut().map(|e| e as _),
-            );
-            let (summary, outcome) = finish(name, opts, setup, envs, observer, meta(desc))?;
+            let search_env = search.as_mut().map(|e| e as &mut dyn Environment);
+            let (summary, outcome) = finish(
+                name,
+                opts,
+                setup,
+                &mut env,
+                search_env,
+                observer,
+                meta(desc),
+            )?;
             checks::after_run(&cfg, summary, &outcome, opts)?
         }
         PolicyKind::Linear => {
             let policy = arm::linear_policy(&cfg, opts.seed)?;
             let (setup, mut env) = arm::setup(&cfg, policy, opts.seed)?;
-            let mut search = arm::search_env(&cfg)?;
-            let envs = (
-                &mut env as &mut dyn Environment,
-                search.as_mut().map(|e| e as _),
-            );
             let desc = "linear (4 inputs)".to_string();
-            let (summary, outcome) = finish(name, opts, setup, envs, observer, meta(desc))?;
+            let search_env = search.as_mut().map(|e| e as &mut dyn Environment);
+            let (summary, outcome) = finish(
+                name,
+                opts,
+                setup,
+                &mut env,
+                search_env,
+                observer,
+                meta(desc),
+            )?;
             checks::after_run(&cfg, summary, &outcome, opts)?
         }
     };
@@ -383,7 +392,8 @@ fn finish<P>(
     name: &str,
     opts: &RunOptions,
     setup: LoopSetup<P>,
-    (env, initial_env): (&mut dyn Environment, Option<&mut dyn Environment>),
+    env: &mut dyn Environment,
+    initial_env: Option<&mut dyn Environment>,
     observer: &mut dyn LoopObserver,
     meta: RunMeta<'_>,
 ) -> Result<(Summary, LoopOutcome<P>), ExperimentError>
