@@ -233,6 +233,27 @@ fn arm_extras(r: &vicpilco_learn::data::Rollout) -> (f64, f64, f64) {
     (final_x, max_force, start_y)
 }
 
+/// The learning loop of an arm experiment with `policy`: its environment (and the search
+/// roll-out's, when that differs), the run, and the checks that need the loop's outcome.
+fn learn_on_arm<P>(
+    name: &str,
+    cfg: &ArmExperiment,
+    policy: P,
+    opts: &RunOptions,
+    observer: &mut dyn LoopObserver,
+    meta: RunMeta<'_>,
+) -> Result<Summary, ExperimentError>
+where
+    P: Policy + Clone + Sync,
+    P::Cache: Send,
+{
+    let (setup, mut env) = arm::setup(cfg, policy, opts.seed)?;
+    let mut search = arm::search_env(cfg)?;
+    let search_env = search.as_mut().map(|e| e as &mut dyn Environment);
+    let (summary, outcome) = finish(name, opts, setup, &mut env, search_env, observer, meta)?;
+    checks::after_run(cfg, summary, &outcome, opts)
+}
+
 /// A thesis experiment on the arm.
 fn run_arm(
     name: &str,
@@ -277,39 +298,16 @@ fn run_arm(
             checks::thesis_checks(name, &cfg, planned, s)
         })),
     };
-    let mut search = arm::search_env(&cfg)?;
     let mut summary = match cfg.policy.kind {
         PolicyKind::Rbf => {
             let policy = arm::rbf_policy(&cfg, opts.seed)?;
             let desc = format!("rbf ({} basis functions, 4 inputs)", policy.n_centres());
-            let (setup, mut env) = arm::setup(&cfg, policy, opts.seed)?;
-            let search_env = search.as_mut().map(|e| e as &mut dyn Environment);
-            let (summary, outcome) = finish(
-                name,
-                opts,
-                setup,
-                &mut env,
-                search_env,
-                observer,
-                meta(desc),
-            )?;
-            checks::after_run(&cfg, summary, &outcome, opts)?
+            learn_on_arm(name, &cfg, policy, opts, observer, meta(desc))?
         }
         PolicyKind::Linear => {
             let policy = arm::linear_policy(&cfg, opts.seed)?;
-            let (setup, mut env) = arm::setup(&cfg, policy, opts.seed)?;
             let desc = "linear (4 inputs)".to_string();
-            let search_env = search.as_mut().map(|e| e as &mut dyn Environment);
-            let (summary, outcome) = finish(
-                name,
-                opts,
-                setup,
-                &mut env,
-                search_env,
-                observer,
-                meta(desc),
-            )?;
-            checks::after_run(&cfg, summary, &outcome, opts)?
+            learn_on_arm(name, &cfg, policy, opts, observer, meta(desc))?
         }
     };
     summary.thesis_reference = checks::thesis_checks(name, &cfg, planned, &summary);
