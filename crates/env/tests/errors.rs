@@ -175,6 +175,7 @@ fn a_vilta_reference_driven_out_of_reach_ends_the_episode() {
             delta_tick: 0.005,
             origin: ReferenceOrigin::Start,
             max_lead: None,
+            lead_state: false,
         },
         ..ArmConfig::default()
     };

@@ -118,6 +118,7 @@ fn measured_reference_origin_keeps_the_force_against_a_wall_from_growing() {
                 delta_tick: 0.005,
                 origin,
                 max_lead: None,
+                lead_state: false,
             },
             ..ArmConfig::ideal()
         };
@@ -162,6 +163,7 @@ fn max_lead_holds_the_reference_and_the_force_against_a_wall() {
             delta_tick: 0.005,
             origin: ReferenceOrigin::Start,
             max_lead: Some(lead),
+            lead_state: false,
         },
         ..ArmConfig::ideal()
     };
@@ -206,10 +208,57 @@ fn max_lead_must_be_positive() {
                 delta_tick: 0.005,
                 origin: ReferenceOrigin::Start,
                 max_lead: Some(bad),
+                lead_state: false,
             },
             ..ArmConfig::ideal()
         };
         let err = ArmEnv::new(cfg).unwrap_err().to_string();
         assert!(err.contains("mode.max_lead"), "{bad}: {err}");
     }
+}
+
+/// With `lead_state` the state gains the reference's lead over the TCP, exactly x_v − x on
+/// the true state and x_v − x̂ on the observation; a start's lead entries place the reference
+/// that far ahead of the start pose.
+#[test]
+fn lead_state_reports_the_reference_lead() {
+    use vicpilco_env::arm::ReferenceOrigin;
+    let cfg = ArmConfig {
+        mode: ActionMode::Vilta {
+            delta_max: 0.0025,
+            delta_tick: 0.005,
+            origin: ReferenceOrigin::Start,
+            max_lead: None,
+            lead_state: true,
+        },
+        ..ArmConfig::default()
+    };
+    let mut env = ArmEnv::new(cfg).unwrap();
+    assert_eq!(env.state_dim(), 8);
+    assert_eq!(
+        env.state_names(),
+        ["x", "y", "xd", "yd", "fx", "fy", "lead_x", "lead_y"]
+    );
+    assert!(env.reset(&[0.5, 0.0, 0.0, 0.0, 0.0, 0.0], 1).is_err());
+    let s0 = env
+        .reset(&[0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.02, -0.01], 1)
+        .unwrap();
+    assert!((s0[6] - (0.52 - s0[0])).abs() < 1e-12, "{s0:?}");
+    assert!((s0[7] - (-0.01 - s0[1])).abs() < 1e-12, "{s0:?}");
+    let mut leads = Vec::new();
+    for _ in 0..5 {
+        let s = env.step(&[100.0, 100.0, 0.001, 0.0]).unwrap();
+        let (z, r) = (&s.info.true_state, s.info.reference.clone().unwrap());
+        assert_eq!(z.len(), 8);
+        assert!((z[6] - (r[0] - z[0])).abs() < 1e-15, "{z:?} {r:?}");
+        assert!((z[7] - (r[1] - z[1])).abs() < 1e-15, "{z:?} {r:?}");
+        assert!(
+            (s.observation[6] - (r[0] - s.observation[0])).abs() < 1e-12,
+            "{:?} {r:?}",
+            s.observation
+        );
+        leads.push(z[6]);
+    }
+    // The start's 2 cm lead pulls the arm on, so it catches up with the 0.2 m/s reference.
+    assert!(leads[0] > 0.02 && leads[4].abs() < 0.005, "{leads:?}");
 }

@@ -37,8 +37,11 @@ pub const PURPOSE_EVALUATION: u64 = 12;
 /// Seed purpose of the initial scan's jitter, derived from the explore seed.
 const PURPOSE_SCAN_JITTER: u64 = 13;
 
-/// Index of the time entry in the augmented state (x, y, ẋ, ẏ, f_x, f_y, t).
+/// Index of the time entry in the augmented state (x, y, ẋ, ẏ, f_x, f_y, t); with
+/// `vilta.lead_state` the lead comes before t, which is then at `cfg.state_dim()`.
 pub const TIME_INDEX: usize = 6;
+/// Indices of the reference's lead (x_v − x, y_v − y) in the state with `vilta.lead_state`.
+pub const LEAD_INDICES: [usize; 2] = [6, 7];
 /// Indices of f_x, f_y in the arm's state (x, y, ẋ, ẏ, f_x, f_y).
 pub const FORCE_INDICES: [usize; 2] = [4, 5];
 /// The dynamics GP's targets, in output order: position and velocity increments, then the
@@ -46,15 +49,12 @@ pub const FORCE_INDICES: [usize; 2] = [4, 5];
 pub const GP_TARGET_NAMES: [&str; 6] = ["dx", "dy", "dxd", "dyd", "fx", "fy"];
 
 /// The dynamics GP's input names in column order: the state entries `spec.dyn_inputs` lists
-/// (the arm's state, with `t` at [`TIME_INDEX`]), then the environment's actions.
+/// (the arm's state, with `t` after it), then the environment's actions.
 pub fn gp_input_names(spec: &StepSpec, env: &ArmEnv) -> Vec<String> {
+    let state = env.state_names();
     spec.dyn_inputs
         .iter()
-        .map(|&i| {
-            vicpilco_env::arm::STATE_NAMES
-                .get(i)
-                .map_or_else(|| "t".to_string(), |s| s.to_string())
-        })
+        .map(|&i| state.get(i).cloned().unwrap_or_else(|| "t".to_string()))
         .chain(env.action_names())
         .collect()
 }
@@ -80,6 +80,7 @@ pub fn arm_config(cfg: &ArmExperiment) -> ArmConfig {
             delta_tick: v.delta_tick,
             origin: v.reference,
             max_lead: v.max_lead,
+            lead_state: v.lead_state.is_some(),
         };
         arm.geometry = arm.geometry.shifted(v.geometry_shift_x, 0.0);
     }
@@ -122,27 +123,38 @@ struct Problem {
 
 fn problem(cfg: &ArmExperiment, arm: &ArmConfig) -> Result<Problem, ExperimentError> {
     let m = cfg.n_actions();
-    let mut dyn_inputs = vec![0, 1, 2, 3];
+    let state_dim = cfg.state_dim();
+    let lead = cfg.lead_state();
+    let mut policy_inputs = vec![0, 1, 2, 3];
+    if lead.is_some() {
+        policy_inputs.extend(LEAD_INDICES);
+    }
+    let mut dyn_inputs = policy_inputs.clone();
     if cfg.gp.force_inputs {
         dyn_inputs.extend(FORCE_INDICES);
     }
     if cfg.gp.time_input {
-        dyn_inputs.push(TIME_INDEX);
+        // Time follows the state in the augmented vector.
+        dyn_inputs.push(state_dim);
     }
+    let mut targets = vec![
+        Target::Relative,
+        Target::Relative,
+        Target::Relative,
+        Target::Relative,
+        Target::Absolute,
+        Target::Absolute,
+    ];
+    // The lead moves by the step's reference increments less the TCP's: an increment, as the
+    // position is.
+    targets.resize(state_dim, Target::Relative);
     let spec = StepSpec {
-        state_dim: 6,
+        state_dim,
         angles: vec![],
         time_input: cfg.gp.time_input,
-        policy_inputs: vec![0, 1, 2, 3],
+        policy_inputs,
         dyn_inputs,
-        targets: vec![
-            Target::Relative,
-            Target::Relative,
-            Target::Relative,
-            Target::Relative,
-            Target::Absolute,
-            Target::Absolute,
-        ],
+        targets,
         dt: cfg.dt,
     };
     let prior_shift = match cfg.gp.prior_mean {
@@ -214,7 +226,7 @@ fn problem(cfg: &ArmExperiment, arm: &ArmConfig) -> Result<Problem, ExperimentEr
     };
     let squash = PartialSat::new(m, &(0..m).collect::<Vec<_>>(), &ranges)?;
     let ret = ReturnSpec {
-        state_cost: Some(CostSum::new(6, costs)?),
+        state_cost: Some(CostSum::new(state_dim, costs)?),
         cost_angles: vec![],
         w_mean: 1.0,
         w_std: c.w_std,
@@ -223,26 +235,40 @@ fn problem(cfg: &ArmExperiment, arm: &ArmConfig) -> Result<Problem, ExperimentEr
         horizon: cfg.horizon,
     };
     let s = &cfg.start;
-    let start_cov = diag(&s.prediction_std.map(|v| v * v));
+    // The reference starts at the start pose: the lead's mean is 0.
+    let start_state: Vec<f64> = s
+        .state
+        .iter()
+        .copied()
+        .chain(lead.map(|_| [0.0; 2]).into_iter().flatten())
+        .collect();
+    let start_var: Vec<f64> = s
+        .prediction_std
+        .iter()
+        .copied()
+        .chain(lead.map(|l| [l.prediction_std; 2]).into_iter().flatten())
+        .map(|v| v * v)
+        .collect();
+    let start_cov = diag(&start_var);
     let prediction_starts = match &s.prediction_y {
         Some(ys) => ys
             .iter()
             .map(|&y| {
-                let mut mean = s.state.to_vec();
+                let mut mean = start_state.clone();
                 mean[1] = y;
                 (mean, start_cov.clone())
             })
             .collect(),
-        None => vec![(s.state.to_vec(), start_cov)],
+        None => vec![(start_state.clone(), start_cov)],
     };
     let env_start = match s.y_range {
         Some([lo, hi]) => {
-            let (mut a, mut b) = (s.state.to_vec(), s.state.to_vec());
+            let (mut a, mut b) = (start_state.clone(), start_state.clone());
             a[1] = lo;
             b[1] = hi;
             StartDistribution::Uniform { lo: a, hi: b }
         }
-        None => StartDistribution::fixed(&s.state),
+        None => StartDistribution::fixed(&start_state),
     };
     let ou = OuParams {
         a_min: cfg.policy.k_min,
@@ -334,9 +360,14 @@ pub fn rbf_policy(cfg: &ArmExperiment, seed: u64) -> Result<RbfPolicy, Experimen
     let m = cfg.n_actions();
     let path = initial_path(cfg, &arm, [cfg.start.state[0], cfg.start.state[1]]);
     let t_end = cfg.horizon as f64 * cfg.dt;
-    let centres = Mat::from_fn(n, 4, |i, k| {
+    let n_in = cfg.n_policy_inputs();
+    // Centres on the scan's path, with the reference leading by nothing (as it starts).
+    let centres = Mat::from_fn(n, n_in, |i, k| {
         let r = path(t_end * (i as f64 + 0.5) / n as f64);
-        [r.x[0], r.x[1], r.xd[0], r.xd[1]][k]
+        [r.x[0], r.x[1], r.xd[0], r.xd[1]]
+            .get(k)
+            .copied()
+            .unwrap_or(0.0)
     });
     let mut rng = rand::rngs::ChaCha8Rng::seed_from_u64(derive_seed(seed, 0, PURPOSE_POLICY_INIT));
     let mut targets = Mat::from_fn(n, m, |_, _| {
@@ -358,7 +389,8 @@ pub fn rbf_policy(cfg: &ArmExperiment, seed: u64) -> Result<RbfPolicy, Experimen
         }
     }
     let ls = cfg.policy.lengthscales.unwrap_or([1.0; 4]);
-    let log_ls = Mat::from_fn(4, m, |k, _| ls[k].ln());
+    let lead_ls = cfg.lead_state().map_or(1.0, |l| l.policy_lengthscale);
+    let log_ls = Mat::from_fn(n_in, m, |k, _| ls.get(k).copied().unwrap_or(lead_ls).ln());
     Ok(RbfPolicy::new(
         centres,
         targets,
@@ -373,7 +405,7 @@ pub fn rbf_policy(cfg: &ArmExperiment, seed: u64) -> Result<RbfPolicy, Experimen
 pub fn linear_policy(cfg: &ArmExperiment, seed: u64) -> Result<LinearPolicy, ExperimentError> {
     let m = cfg.n_actions();
     let mut rng = rand::rngs::ChaCha8Rng::seed_from_u64(derive_seed(seed, 0, PURPOSE_POLICY_INIT));
-    let w = Mat::from_fn(m, 4, |_, _| {
+    let w = Mat::from_fn(m, cfg.n_policy_inputs(), |_, _| {
         cfg.policy.init_std * Distribution::<f64>::sample(&StandardNormal, &mut rng)
     });
     Ok(LinearPolicy::new(w.as_ref(), &vec![0.0; m])?)

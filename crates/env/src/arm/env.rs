@@ -1,5 +1,6 @@
 //! The arm as an [`Environment`]: VIL (a = (k_x, k_y)) or VILTA (a = (k_x, k_y, Δx_ref,
-//! Δy_ref)), observation s = (x, y, ẋ, ẏ, f_x, f_y) from the noisy readings.
+//! Δy_ref)), observation s = (x, y, ẋ, ẏ, f_x, f_y) from the noisy readings, plus for VILTA
+//! with `lead_state` the reference's lead (x_v − x, y_v − y).
 
 use super::kinematics::ik;
 use super::params::{ActionMode, ArmConfig, OnDivergence, ReferenceOrigin};
@@ -13,6 +14,8 @@ use std::collections::BTreeMap;
 
 /// Names of the observed state entries.
 pub const STATE_NAMES: [&str; 6] = ["x", "y", "xd", "yd", "fx", "fy"];
+/// Names of the VILTA reference-lead entries that follow [`STATE_NAMES`] with `lead_state`.
+pub const LEAD_NAMES: [&str; 2] = ["lead_x", "lead_y"];
 
 /// Deepest start inside a surface that `reset` accepts (m); deeper starts are an error.
 pub const START_MAX_PENETRATION: f64 = 1e-3;
@@ -120,7 +123,26 @@ impl ArmEnv {
     fn observation(&self, r: &Reading) -> Vec<f64> {
         let sim = self.sim.as_ref().expect("called after reset");
         let est = impedance::task_state(sim.model(), &r.q, &r.qd);
-        vec![est.x[0], est.x[1], est.xd[0], est.xd[1], r.f[0], r.f[1]]
+        let mut obs = vec![est.x[0], est.x[1], est.xd[0], est.xd[1], r.f[0], r.f[1]];
+        self.push_lead(&mut obs, [est.x[0], est.x[1]]);
+        obs
+    }
+
+    fn lead_state(&self) -> bool {
+        matches!(
+            self.cfg.mode,
+            ActionMode::Vilta {
+                lead_state: true,
+                ..
+            }
+        )
+    }
+
+    /// Appends the reference's lead over `position` when the state carries it.
+    fn push_lead(&self, state: &mut Vec<f64>, position: [f64; 2]) {
+        if self.lead_state() {
+            state.extend([self.vilta_x[0] - position[0], self.vilta_x[1] - position[1]]);
+        }
     }
 
     fn reference_at(&self, t: f64) -> RefPoint {
@@ -174,7 +196,12 @@ impl ArmEnv {
 
 impl Environment for ArmEnv {
     fn state_dim(&self) -> usize {
-        6
+        STATE_NAMES.len()
+            + if self.lead_state() {
+                LEAD_NAMES.len()
+            } else {
+                0
+            }
     }
     fn action_dim(&self) -> usize {
         match self.cfg.mode {
@@ -189,7 +216,11 @@ impl Environment for ArmEnv {
         self.cfg.horizon
     }
     fn state_names(&self) -> Vec<String> {
-        STATE_NAMES.iter().map(|s| s.to_string()).collect()
+        STATE_NAMES
+            .iter()
+            .chain(LEAD_NAMES.iter().filter(|_| self.lead_state()))
+            .map(|s| s.to_string())
+            .collect()
     }
     fn action_names(&self) -> Vec<String> {
         self.stiffness_names()[..self.action_dim()]
@@ -200,7 +231,8 @@ impl Environment for ArmEnv {
 
     /// Places the TCP at (start[0], start[1]) with φ = 0 by inverse kinematics (elbow q2 > 0),
     /// at rest. The other start entries (velocities, forces) must be finite and are ignored:
-    /// the arm always starts at rest and contact forces follow from the pose.
+    /// the arm always starts at rest and contact forces follow from the pose. With
+    /// `lead_state`, the reference starts `(start[6], start[7])` ahead of the start pose.
     fn reset(&mut self, start: &[f64], seed: u64) -> Result<Vec<f64>, EnvError> {
         if start.len() != self.state_dim() {
             return Err(EnvError::Dimension {
@@ -209,10 +241,10 @@ impl Environment for ArmEnv {
                 expected: self.state_dim(),
             });
         }
-        for (i, v) in start.iter().enumerate() {
+        for (v, name) in start.iter().zip(self.state_names()) {
             if !v.is_finite() {
                 return Err(EnvError::NonFiniteStart {
-                    field: STATE_NAMES[i].into(),
+                    field: name,
                     value: *v,
                 });
             }
@@ -243,6 +275,10 @@ impl Environment for ArmEnv {
         self.steps = 0;
         self.done = false;
         self.vilta_x = pose;
+        if self.lead_state() {
+            self.vilta_x[0] += start[6];
+            self.vilta_x[1] += start[7];
+        }
         self.vilta_xd = [0.0; 3];
         self.vilta_xd_now = [0.0; 3];
         Ok(self.observation(&r))
@@ -341,11 +377,13 @@ impl Environment for ArmEnv {
         }
         values.insert("phi".to_string(), tcp.x[2]);
         values.insert("max_abs_f".to_string(), max_f);
+        let mut true_state = vec![tcp.x[0], tcp.x[1], tcp.xd[0], tcp.xd[1], c.w[0], c.w[1]];
+        self.push_lead(&mut true_state, [tcp.x[0], tcp.x[1]]);
         Ok(Step {
             observation: self.observation(&r),
             info: StepInfo {
                 t,
-                true_state: vec![tcp.x[0], tcp.x[1], tcp.xd[0], tcp.xd[1], c.w[0], c.w[1]],
+                true_state,
                 reference: Some(vec![refp.x[0], refp.x[1], refp.xd[0], refp.xd[1]]),
                 flags,
                 values,

@@ -294,6 +294,12 @@ pub enum ActionMode {
         /// GP does not see, x_v − x, within ±max_lead.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         max_lead: Option<f64>,
+        /// Whether the observation (and the true state) carries the reference's lead over the
+        /// TCP, ℓ = (x_v − x, y_v − y), as entries 6 and 7 (ours; `false`: the six
+        /// entries). The controller knows x_v, so ℓ is as observable as x; without it x_v is a
+        /// state the learner never sees and the dynamics are not Markov in the observation.
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        lead_state: bool,
     },
 }
 
@@ -341,6 +347,7 @@ impl ActionMode {
             delta_tick: 0.005,
             origin: ReferenceOrigin::Start,
             max_lead: None,
+            lead_state: false,
         }
     }
 }

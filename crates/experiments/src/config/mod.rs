@@ -317,12 +317,32 @@ pub struct ViltaConfig {
     /// `scan-jitter-lead`, EXPERIMENTS.md).
     #[serde(default = "on", skip_serializing_if = "is_on")]
     pub max_lead_in_search: bool,
+    /// The reference's lead over the TCP, (x_v − x, y_v − y), as two more state entries that
+    /// the dynamics GP takes as inputs and predicts (relative targets, zero prior) and the
+    /// policy takes as inputs (ours; absent: the state, D = 8). See [`LeadState`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lead_state: Option<LeadState>,
     /// Which update's policy the run hands over and evaluates from the fresh starts:
     /// `"last"` (PILCO, the default) or `"most-successful"` (ours). It acts after learning
     /// only, so it is not part of a run's identity and a finished run can be evaluated again
     /// under the other rule with `--resume`.
     #[serde(default, skip_serializing_if = "FinalPolicy::is_last")]
     pub final_policy: FinalPolicy,
+}
+
+/// `vilta.lead_state` (ours). The integrated reference x_v is a state the GP and policy
+/// never see, so a policy cannot tell a reference running on into a wall from one at rest and
+/// the model cannot tell the force it causes (EXPERIMENTS.md, "Force inputs for VILTA" and the
+/// twenty-fifth session). With the lead in the state the transition is Markov in what is
+/// observed: the GP gets D = 10 inputs and E = 8 targets, the policy n_π = 6 inputs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LeadState {
+    /// Std (m) of each lead entry of the prediction's start distribution; the reference starts
+    /// at the start pose, so the start's lead is 0.
+    pub prediction_std: f64,
+    /// Initial RBF policy length-scale (m) on each lead input.
+    pub policy_lengthscale: f64,
 }
 
 /// Which policy of a run is its result (`vilta.final_policy`).
@@ -377,9 +397,9 @@ pub fn load(path: &Path) -> Result<ArmExperiment, ConfigError> {
 
 impl ArmExperiment {
     /// Learnable policy parameters n_ψ = N_c (n_π + m) + n_π m (RBF, §4-3) or m (n_π + 1)
-    /// (linear), with n_π = 4 inputs and m outputs.
+    /// (linear), with n_π inputs and m outputs.
     pub fn n_params(&self) -> usize {
-        let (n_in, m) = (4, self.n_actions());
+        let (n_in, m) = (self.n_policy_inputs(), self.n_actions());
         match self.policy.kind {
             PolicyKind::Rbf => self.policy.n_basis.unwrap_or(0) * (n_in + m) + n_in * m,
             PolicyKind::Linear => m * (n_in + 1),
@@ -427,6 +447,9 @@ impl ArmExperiment {
         if self.vilta.as_ref().is_some_and(|v| !v.max_lead_in_search) {
             keys.push("vilta.max_lead_in_search");
         }
+        if self.lead_state().is_some() {
+            keys.push("vilta.lead_state");
+        }
         if self
             .vilta
             .as_ref()
@@ -452,12 +475,29 @@ impl ArmExperiment {
         keys
     }
 
-    /// D of the dynamics GP: the 4 policy inputs, the forces if `gp.force_inputs`, time if
+    /// D of the dynamics GP: the policy inputs, the forces if `gp.force_inputs`, time if
     /// `gp.time_input`, and the actions.
     pub fn gp_input_dim(&self) -> usize {
-        4 + 2 * usize::from(self.gp.force_inputs)
+        self.n_policy_inputs()
+            + 2 * usize::from(self.gp.force_inputs)
             + usize::from(self.gp.time_input)
             + self.n_actions()
+    }
+
+    /// `vilta.lead_state`, if set.
+    pub fn lead_state(&self) -> Option<&LeadState> {
+        self.vilta.as_ref().and_then(|v| v.lead_state.as_ref())
+    }
+
+    /// Entries of the learner's state: (x, y, ẋ, ẏ, f_x, f_y), plus the reference's lead
+    /// with `vilta.lead_state`.
+    pub fn state_dim(&self) -> usize {
+        6 + 2 * usize::from(self.lead_state().is_some())
+    }
+
+    /// n_π: (x, y, ẋ, ẏ), plus the reference's lead with `vilta.lead_state`.
+    pub fn n_policy_inputs(&self) -> usize {
+        4 + 2 * usize::from(self.lead_state().is_some())
     }
 
     /// Actions: (k_x, k_y) or (k_x, k_y, Δx_ref, Δy_ref).

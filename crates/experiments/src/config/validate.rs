@@ -250,6 +250,10 @@ impl ArmExperiment {
                     if let Some(d) = v.max_lead {
                         c.positive("vilta.max_lead", d)?;
                     }
+                    if let Some(l) = &v.lead_state {
+                        c.positive("vilta.lead_state.prediction_std", l.prediction_std)?;
+                        c.positive("vilta.lead_state.policy_lengthscale", l.policy_lengthscale)?;
+                    }
                     if !v.max_lead_in_search && v.max_lead.is_none() {
                         return Err(c.fail(
                             "vilta.max_lead_in_search",
