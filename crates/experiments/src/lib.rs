@@ -301,12 +301,16 @@ fn run_arm(
     let mut summary = match cfg.policy.kind {
         PolicyKind::Rbf => {
             let policy = arm::rbf_policy(&cfg, opts.seed)?;
-            let desc = format!("rbf ({} basis functions, 4 inputs)", policy.n_centres());
+            let desc = format!(
+                "rbf ({} basis functions, {} inputs)",
+                policy.n_centres(),
+                policy.n_inputs()
+            );
             learn_on_arm(name, &cfg, policy, opts, observer, meta(desc))?
         }
         PolicyKind::Linear => {
             let policy = arm::linear_policy(&cfg, opts.seed)?;
-            let desc = "linear (4 inputs)".to_string();
+            let desc = format!("linear ({} inputs)", policy.n_inputs());
             learn_on_arm(name, &cfg, policy, opts, observer, meta(desc))?
         }
     };

@@ -95,6 +95,7 @@ fn a_quick_update_learns_and_predicts_the_lead() {
     )
     .unwrap();
     assert_eq!(summary["n_params"], 524, "{}", summary["n_params"]);
+    assert_eq!(summary["policy"], "rbf (50 basis functions, 6 inputs)");
     let predictions = lines(&dir.join("run").join("predictions.jsonl"));
     let p = &predictions[0];
     assert_eq!(p["state_names"][6], "lead_x");
