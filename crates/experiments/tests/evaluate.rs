@@ -2,14 +2,14 @@
 //! on the final policy it repeats `final_eval.jsonl`, it reads each update's policy from
 //! `policies.jsonl`, and it refuses what it cannot do with an error that names why.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use vicpilco_experiments::evaluate::{evaluate, markdown_table, EvaluateOptions};
 use vicpilco_experiments::{run, ExperimentError, RecordedRunOptions, RunOptions};
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vicpilco-evaluate-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+    common::scratch("evaluate", name)
 }
 
 /// A vilta-var run of the initial search roll-out only: its final policy is the untrained one
@@ -38,26 +38,18 @@ fn options(from: &Path, out: PathBuf) -> EvaluateOptions {
     }
 }
 
-fn lines(path: &Path) -> Vec<serde_json::Value> {
-    std::fs::read_to_string(path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect()
-}
-
 #[test]
 fn the_final_policy_repeats_the_final_evaluation_and_each_update_reads_its_own_policy() {
     let base = scratch("repeat");
     let run_dir = base.join("run");
     initial_only_run(&run_dir);
-    let final_eval = lines(&run_dir.join("final_eval.jsonl"));
+    let final_eval = common::json_lines(&run_dir.join("final_eval.jsonl"));
     assert_eq!(final_eval.len(), 20);
 
     let out = base.join("every-update.jsonl");
     let results = evaluate("vilta-var", &options(&run_dir, out.clone())).unwrap();
     assert_eq!(results.len(), 1, "updates 0 to 0");
-    let written = lines(&out);
+    let written = common::json_lines(&out);
     assert_eq!(written.len(), 1);
     assert_eq!(written[0]["update"], 0);
     let table = std::fs::read_to_string(base.join("every-update.md")).unwrap();
@@ -141,7 +133,7 @@ fn what_evaluate_cannot_do_is_an_error_naming_why() {
         m.contains("once.jsonl"),
         "an earlier result is not overwritten: {m}"
     );
-    assert_eq!(lines(&out).len(), 1);
+    assert_eq!(common::json_lines(&out).len(), 1);
     std::fs::write(base.join("table-taken.md"), "kept").unwrap();
     let m = message(evaluate(
         "vilta-var",
@@ -255,7 +247,7 @@ fn the_most_successful_rule_evaluates_the_best_update_also_of_a_finished_run() {
     let mut evaluated = quick_update(1);
     let update_1 = evaluated.remove(0);
     assert_eq!(update_1.successes, final_eval.successes);
-    let recorded = lines(&run_dir.join("final_eval.jsonl"));
+    let recorded = common::json_lines(&run_dir.join("final_eval.jsonl"));
     assert_eq!(recorded.len(), update_1.starts.len());
     let mut differs_from_last = false;
     let last = quick_update(2);

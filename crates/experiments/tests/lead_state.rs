@@ -1,7 +1,8 @@
 //! `vilta.lead_state` (ours): the reference's lead over the TCP as two more state entries,
 //! which the dynamics GP takes as inputs and predicts, and the policy takes as inputs.
 
-use std::path::{Path, PathBuf};
+mod common;
+
 use vicpilco_experiments::{config, run, RunOptions};
 
 const LEAD_TABLE: &str = "[vilta.lead_state]\nprediction_std = 0.001\npolicy_lengthscale = 0.05\n";
@@ -46,27 +47,12 @@ fn the_lead_adds_two_state_entries_gp_inputs_and_policy_inputs() {
     }
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let dir =
-        std::env::temp_dir().join(format!("vicpilco-lead-state-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn lines(path: &Path) -> Vec<serde_json::Value> {
-    std::fs::read_to_string(path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect()
-}
-
 /// One quick update learns on the 8-entry state: every recorded state carries the lead, equal
 /// to the reference less the TCP, and the long-term prediction has 8 entries per step.
 #[test]
 fn a_quick_update_learns_and_predicts_the_lead() {
-    let dir = scratch("quick");
+    let dir = common::scratch("lead-state", "quick");
+    std::fs::create_dir_all(&dir).unwrap();
     let cfg = dir.join("vilta.toml");
     std::fs::write(&cfg, with_lead(LEAD_TABLE)).unwrap();
     let opts = RunOptions {
@@ -78,7 +64,7 @@ fn a_quick_update_learns_and_predicts_the_lead() {
         ..Default::default()
     };
     run("vilta", &opts, &mut ()).expect("a vilta update with the lead state");
-    let rollouts = lines(&dir.join("run").join("rollouts.jsonl"));
+    let rollouts = common::json_lines(&dir.join("run").join("rollouts.jsonl"));
     assert_eq!(rollouts.len(), 2, "the search and one update");
     for record in &rollouts {
         for info in record["rollout"]["infos"].as_array().unwrap() {
@@ -96,7 +82,7 @@ fn a_quick_update_learns_and_predicts_the_lead() {
     .unwrap();
     assert_eq!(summary["n_params"], 524, "{}", summary["n_params"]);
     assert_eq!(summary["policy"], "rbf (50 basis functions, 6 inputs)");
-    let predictions = lines(&dir.join("run").join("predictions.jsonl"));
+    let predictions = common::json_lines(&dir.join("run").join("predictions.jsonl"));
     let p = &predictions[0];
     assert_eq!(p["state_names"][6], "lead_x");
     let mean = p["starts"][0][10]["mean"]

@@ -2,6 +2,8 @@
 //! the reference-lead bound and leaves the bound on the learned policy's roll-outs: the search
 //! is then the unbounded one, bit for bit, while with the default the bound holds it back.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use vicpilco_experiments::{config, run, RunOptions};
 
@@ -10,12 +12,7 @@ use vicpilco_experiments::{config, run, RunOptions};
 const LEAD: f64 = 0.03;
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "vicpilco-search-lead-{}-{name}",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+    common::scratch("search-lead", name)
 }
 
 /// The search roll-out of a vilta run with `vilta_lines` added to its `[vilta]` table, and no
@@ -44,8 +41,10 @@ fn search_rollout(name: &str, vilta_lines: &str) -> serde_json::Value {
 }
 
 fn first_line(path: &Path) -> serde_json::Value {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    serde_json::from_str(text.lines().next().expect("the search roll-out")).unwrap()
+    common::json_lines(path)
+        .into_iter()
+        .next()
+        .expect("the search roll-out")
 }
 
 /// Largest lead of the reference over the true TCP position, on x or y, at a step's end.
