@@ -492,12 +492,13 @@ impl ArmExperiment {
     /// Entries of the learner's state: (x, y, ẋ, ẏ, f_x, f_y), plus the reference's lead
     /// with `vilta.lead_state`.
     pub fn state_dim(&self) -> usize {
-        6 + 2 * usize::from(self.lead_state().is_some())
+        use vicpilco_env::arm::{LEAD_NAMES, STATE_NAMES};
+        STATE_NAMES.len() + LEAD_NAMES.len() * usize::from(self.lead_state().is_some())
     }
 
     /// n_π: (x, y, ẋ, ẏ), plus the reference's lead with `vilta.lead_state`.
     pub fn n_policy_inputs(&self) -> usize {
-        4 + 2 * usize::from(self.lead_state().is_some())
+        4 + vicpilco_env::arm::LEAD_NAMES.len() * usize::from(self.lead_state().is_some())
     }
 
     /// Actions: (k_x, k_y) or (k_x, k_y, Δx_ref, Δy_ref).
