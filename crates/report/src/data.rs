@@ -240,6 +240,11 @@ pub(crate) struct Rollout {
 }
 
 impl Rollout {
+    /// The true y at the roll-out's end (arm runs), `None` without true states.
+    pub fn final_y(&self) -> Option<f64> {
+        self.true_states.last().and_then(|s| s.get(1)).copied()
+    }
+
     /// Mean and population std of action component `j` over the roll-out; `None` without
     /// actions or when the rows are shorter than `j + 1`.
     pub fn action_mean_std(&self, j: usize) -> Option<(f64, f64)> {

@@ -2,7 +2,7 @@
 //! EXPERIMENTS.md (or an issue) as they were written, not retyped. No plots: they live in
 //! report.html and the PNG/SVG files beside it.
 
-use crate::data::{num, Colour, Run};
+use crate::data::{num, Colour, Rollout, Run};
 use std::fmt::Write;
 
 /// A table cell: a `|` would end the cell and a line break the row.
@@ -53,9 +53,18 @@ fn episodes(h: &mut String, run: &Run) {
     // Columns only arm runs fill (final x, force, GP size) are left out when no update has them.
     let arm = eps.iter().any(|e| e.final_x.is_some());
     let gp = eps.iter().any(|e| e.n_train.is_some());
+    // Columns read from the recorded roll-outs: the final y (where a VILTA run that did not
+    // insert is pressing: below or above the hole) and the gains.
+    let recorded = arm && run.rollouts.is_some();
     let mut names = vec!["update", "predicted", "recorded", "colour"];
     if arm {
-        names.extend(["final x (m)", "max force (N)"]);
+        names.push("final x (m)");
+    }
+    if recorded {
+        names.push("final y (m)");
+    }
+    if arm {
+        names.push("max force (N)");
     }
     names.extend(["train (s)", "optimise (s)", "value+grad evaluations"]);
     if gp {
@@ -68,8 +77,7 @@ fn episodes(h: &mut String, run: &Run) {
     }
     // Arm runs: each gain's mean ± std over the roll-out; a std of 0 is a policy output that
     // has died at the middle of its range (EXPERIMENTS.md, "The RBF policy's k_x output dies").
-    let gains = arm && run.rollouts.is_some();
-    if gains {
+    if recorded {
         names.extend(["k_x mean ± std (N/m)", "k_y mean ± std (N/m)"]);
     }
     header(h, &names);
@@ -80,8 +88,15 @@ fn episodes(h: &mut String, run: &Run) {
             format!("{:.1}", e.recorded),
             e.colour().map_or("–", Colour::name).to_string(),
         ];
+        let rollout = run.rollout_of(e.index);
         if arm {
-            cells.extend([num(e.final_x, 3), num(e.max_force, 0)]);
+            cells.push(num(e.final_x, 3));
+        }
+        if recorded {
+            cells.push(num(rollout.and_then(Rollout::final_y), 3));
+        }
+        if arm {
+            cells.push(num(e.max_force, 0));
         }
         cells.extend([
             num(e.train_s, 0),
@@ -105,8 +120,7 @@ fn episodes(h: &mut String, run: &Run) {
                 .into(),
             );
         }
-        if gains {
-            let rollout = run.rollout_of(e.index);
+        if recorded {
             for j in 0..2 {
                 cells.push(
                     rollout

@@ -404,7 +404,7 @@ fn markdown_report_has_a_row_per_update_and_every_claim() {
         .map(|l| serde_json::from_str(l).unwrap())
         .collect();
     for (row, e) in rows.iter().zip(eps) {
-        assert_eq!(row.len(), 13, "{row:?}");
+        assert_eq!(row.len(), 14, "{row:?}");
         let r = rollouts
             .iter()
             .find(|r| r["episode"] == e["index"])
@@ -418,13 +418,19 @@ fn markdown_report_has_a_row_per_update_and_every_claim() {
         let mean = k_x.iter().sum::<f64>() / k_x.len() as f64;
         let sd = (k_x.iter().map(|k| (k - mean).powi(2)).sum::<f64>() / k_x.len() as f64).sqrt();
         assert!(sd > 0.0, "the synthetic gains vary");
-        assert_eq!(row[11], format!("{mean:.1} ± {sd:.1}"));
+        assert_eq!(row[12], format!("{mean:.1} ± {sd:.1}"));
+        let end = r["rollout"]["true_states"]
+            .as_array()
+            .unwrap()
+            .last()
+            .unwrap();
+        assert_eq!(row[5], format!("{:.3}", end[1].as_f64().unwrap()));
         let model = match e.get("model_selection") {
             None => "–",
             Some(m) if m["kept_previous"].as_bool().unwrap() => "previous",
             Some(_) => "refit",
         };
-        assert_eq!(row[10], model);
+        assert_eq!(row[11], model);
         assert_eq!(row[0], e["index"].to_string());
         assert_eq!(
             row[2],
@@ -438,7 +444,7 @@ fn markdown_report_has_a_row_per_update_and_every_claim() {
         } else {
             n.to_string()
         };
-        assert_eq!(row[9], want);
+        assert_eq!(row[10], want);
     }
 
     let claims = md_rows(&page, "## Against the thesis");
