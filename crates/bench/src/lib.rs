@@ -150,6 +150,7 @@ impl W1 {
             policy_inputs: (0..d).collect(),
             dyn_inputs: (0..d).collect(),
             targets: vec![Target::Relative; d],
+            linear_prior: vec![],
             dt: 1.0,
         };
         let log_ls = rows_to_mat(&self.policy_log_lengthscales);

@@ -24,7 +24,7 @@ use vicpilco_gp::{DynamicsOptions, TrainOptions};
 use vicpilco_learn::data::Rollout;
 use vicpilco_learn::outer::{derive_seed, ExplorePolicy, LoopSetup, OptimiserOptions};
 use vicpilco_learn::start::StartDistribution;
-use vicpilco_learn::step::{StepSpec, Target};
+use vicpilco_learn::step::{LinearPrior, StepSpec, Target};
 use vicpilco_learn::value::ReturnSpec;
 use vicpilco_pilco::cost::{CostSum, EnergyCost, SaturatingCost};
 use vicpilco_pilco::policy::{LinearPolicy, RbfPolicy};
@@ -148,6 +148,21 @@ fn problem(cfg: &ArmExperiment, arm: &ArmConfig) -> Result<Problem, ExperimentEr
     // The lead moves by the step's reference increments less the TCP's: an increment, as the
     // position is.
     targets.resize(state_dim, Target::Relative);
+    // vilta.lead_state.force_prior_stiffness: each force's prior mean is k₀ times the lead
+    // along it.
+    let linear_prior = lead
+        .and_then(|l| l.force_prior_stiffness)
+        .map_or_else(Vec::new, |k0| {
+            FORCE_INDICES
+                .iter()
+                .zip(LEAD_INDICES)
+                .map(|(&target, state)| LinearPrior {
+                    target,
+                    state,
+                    coefficient: k0,
+                })
+                .collect()
+        });
     let spec = StepSpec {
         state_dim,
         angles: vec![],
@@ -155,6 +170,7 @@ fn problem(cfg: &ArmExperiment, arm: &ArmConfig) -> Result<Problem, ExperimentEr
         policy_inputs,
         dyn_inputs,
         targets,
+        linear_prior,
         dt: cfg.dt,
     };
     let prior_shift = match cfg.gp.prior_mean {

@@ -94,6 +94,7 @@ where
                 }
             })
             .collect(),
+        linear_prior: vec![],
         dt: scn.dt,
     };
     let all: Vec<usize> = (0..aug).collect();

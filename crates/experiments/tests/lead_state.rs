@@ -3,7 +3,8 @@
 
 mod common;
 
-use vicpilco_experiments::{config, run, RunOptions};
+use vicpilco_experiments::{arm, config, run, RunOptions};
+use vicpilco_learn::data::{training_set, Rollout};
 
 const LEAD_TABLE: &str = "[vilta.lead_state]\nprediction_std = 0.001\npolicy_lengthscale = 0.05\n";
 
@@ -35,8 +36,19 @@ fn the_lead_adds_two_state_entries_gp_inputs_and_policy_inputs() {
     );
     assert!(cfg.ours_keys().contains(&"vilta.lead_state"));
 
-    for (field, bad) in [("prediction_std", "0.0"), ("policy_lengthscale", "-1.0")] {
-        let table = LEAD_TABLE.replace(&format!("{field} = "), &format!("{field} = {bad} #"));
+    let with_force_prior = |k0: &str| format!("{LEAD_TABLE}force_prior_stiffness = {k0}\n");
+    for (field, table) in [
+        (
+            "prediction_std",
+            LEAD_TABLE.replace("prediction_std = ", "prediction_std = 0.0 #"),
+        ),
+        (
+            "policy_lengthscale",
+            LEAD_TABLE.replace("policy_lengthscale = ", "policy_lengthscale = -1.0 #"),
+        ),
+        ("force_prior_stiffness", with_force_prior("-50.0")),
+        ("force_prior_stiffness", with_force_prior("inf")),
+    ] {
         let err = config::parse(&with_lead(&table), "lead.toml")
             .unwrap_err()
             .to_string();
@@ -90,4 +102,58 @@ fn a_quick_update_learns_and_predicts_the_lead() {
         .expect("step 10's mean");
     assert_eq!(mean.len(), 8);
     assert!(mean.iter().all(|v| v.as_f64().is_some_and(f64::is_finite)));
+
+    // vilta.lead_state.force_prior_stiffness: the same roll-outs give force targets less
+    // k₀ times the step's starting lead, and nothing else changes.
+    let k0 = 50.0;
+    let plain = config::parse(&with_lead(LEAD_TABLE), "lead.toml").unwrap();
+    let with_prior = config::parse(
+        &with_lead(&format!("{LEAD_TABLE}force_prior_stiffness = {k0}\n")),
+        "lead.toml",
+    )
+    .unwrap();
+    assert!(with_prior.ours_keys().contains(&"vilta.lead_state"));
+    let spec_of = |cfg| {
+        let policy = arm::rbf_policy(cfg, 1).unwrap();
+        arm::setup(cfg, policy, 1).unwrap().0.spec
+    };
+    let (spec_plain, spec_prior) = (spec_of(&plain), spec_of(&with_prior));
+    assert!(spec_plain.linear_prior.is_empty());
+    let terms: Vec<(usize, usize, f64)> = spec_prior
+        .linear_prior
+        .iter()
+        .map(|t| (t.target, t.state, t.coefficient))
+        .collect();
+    assert_eq!(terms, [(4, 6, k0), (5, 7, k0)]);
+    let recorded: Vec<Rollout> = rollouts
+        .iter()
+        .map(|r| serde_json::from_value(r["rollout"].clone()).unwrap())
+        .collect();
+    let (inputs, targets_plain) = training_set(&spec_plain, &recorded, None);
+    let (inputs_prior, targets_prior) = training_set(&spec_prior, &recorded, None);
+    assert_eq!(inputs, inputs_prior);
+    let starts: Vec<&Vec<f64>> = recorded
+        .iter()
+        .flat_map(|r| &r.observations[..r.len()])
+        .collect();
+    assert_eq!(starts.len(), targets_plain.nrows());
+    let mut largest = 0.0_f64;
+    for (i, x) in starts.iter().enumerate() {
+        for e in 0..8 {
+            let shift = match e {
+                4 | 5 => k0 * x[e + 2],
+                _ => 0.0,
+            };
+            let got = targets_plain[(i, e)] - targets_prior[(i, e)];
+            assert!(
+                (got - shift).abs() < 1e-9,
+                "row {i} target {e}: {got} vs {shift}"
+            );
+            largest = largest.max(shift.abs());
+        }
+    }
+    assert!(
+        largest > 1.0,
+        "the search's lead shifts the force targets ({largest} N)"
+    );
 }

@@ -44,7 +44,8 @@ pub fn augment(spec: &StepSpec, trig: Option<&TrigAug>, x: &[f64], t: usize) -> 
 }
 
 /// GP training inputs `[aug(x_t)[dyn_inputs]; u_t]` and targets (`x_{t+1} − x_t` for relative
-/// dimensions, `x_{t+1}` for absolute ones, each minus the prior mean shift `r_k(t)`), from
+/// dimensions, `x_{t+1}` for absolute ones, each minus its linear prior terms in `x_t` and the
+/// prior mean shift `r_k(t)`), from
 /// every whole step (a step the system ended early is left out).
 pub fn training_set(
     spec: &StepSpec,
@@ -74,8 +75,9 @@ pub fn training_set(
                     } else {
                         0.0
                     };
+                    let linear = spec.linear_prior_mean(k, &r.observations[t]);
                     let shift = prior_shift.and_then(|s| s.get(t)).map_or(0.0, |s| s[k]);
-                    next - base - shift
+                    next - base - linear - shift
                 })
                 .collect();
             xs.push(input);
@@ -88,4 +90,61 @@ pub fn training_set(
         Mat::from_fn(xs.len(), d, |i, j| xs[i][j]),
         Mat::from_fn(ys.len(), e, |i, j| ys[i][j]),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::step::LinearPrior;
+
+    fn spec(targets: Vec<Target>, linear_prior: Vec<LinearPrior>) -> StepSpec {
+        StepSpec {
+            state_dim: 2,
+            angles: vec![],
+            time_input: false,
+            policy_inputs: vec![0, 1],
+            dyn_inputs: vec![0, 1],
+            targets,
+            linear_prior,
+            dt: 0.1,
+        }
+    }
+
+    #[test]
+    fn targets_are_the_next_state_less_their_linear_prior_terms() {
+        let rollout = Rollout {
+            observations: vec![vec![1.0, 10.0], vec![1.5, 12.0], vec![2.5, 11.0]],
+            actions: vec![vec![0.1], vec![0.2]],
+            true_states: vec![vec![0.0; 2]; 3],
+            infos: vec![],
+            used_for_training: true,
+        };
+        let term = |target, state, coefficient| LinearPrior {
+            target,
+            state,
+            coefficient,
+        };
+        let with_prior = spec(
+            vec![Target::Relative, Target::Absolute],
+            vec![term(1, 0, 3.0), term(0, 1, -0.5)],
+        );
+        let (inputs, targets) = training_set(&with_prior, std::slice::from_ref(&rollout), None);
+        assert_eq!((inputs.nrows(), inputs.ncols()), (2, 3));
+        // Step 0: Δx − (−0.5 · 10), y' − 3 · 1; step 1: Δx − (−0.5 · 12), y' − 3 · 1.5.
+        let want = [[0.5 + 5.0, 12.0 - 3.0], [1.0 + 6.0, 11.0 - 4.5]];
+        for (i, row) in want.iter().enumerate() {
+            for (j, w) in row.iter().enumerate() {
+                assert!((targets[(i, j)] - w).abs() < 1e-12, "({i}, {j})");
+            }
+        }
+        // A unit prior on its own state is a relative target.
+        let unit = spec(
+            vec![Target::Absolute; 2],
+            vec![term(0, 0, 1.0), term(1, 1, 1.0)],
+        );
+        let relative = spec(vec![Target::Relative; 2], vec![]);
+        let a = training_set(&unit, std::slice::from_ref(&rollout), None).1;
+        let b = training_set(&relative, std::slice::from_ref(&rollout), None).1;
+        assert_eq!(a, b);
+    }
 }

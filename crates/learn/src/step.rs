@@ -33,6 +33,17 @@ pub enum Target {
     Absolute,
 }
 
+/// A linear term in a target's prior mean: the prior of `x_{t+1}[target]` gains
+/// `coefficient · x_t[state]`, so the GP learns what the data add to it and, away from the
+/// data, the prediction falls back to the line instead of to zero. Relative targets are the
+/// special case `coefficient = 1` on their own state; this adds terms on top of them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinearPrior {
+    pub target: usize,
+    pub state: usize,
+    pub coefficient: f64,
+}
+
 /// The shape of a prediction step: which variables feed the policy and the dynamics GP.
 #[derive(Clone, Debug)]
 pub struct StepSpec {
@@ -48,6 +59,9 @@ pub struct StepSpec {
     pub dyn_inputs: Vec<usize>,
     /// One per state dimension.
     pub targets: Vec<Target>,
+    /// Linear terms of the targets' prior means in the current state (empty: PILCO's zero
+    /// prior, or the previous state for relative targets).
+    pub linear_prior: Vec<LinearPrior>,
     /// Seconds per step (for the time input).
     pub dt: f64,
 }
@@ -109,10 +123,40 @@ impl StepSpec {
                 ),
             );
         }
+        for (i, term) in self.linear_prior.iter().enumerate() {
+            if term.target >= self.state_dim || term.state >= self.state_dim {
+                return bad(
+                    "linear_prior",
+                    format!(
+                        "term {i} links target {} to state {}, beyond the {} states",
+                        term.target, term.state, self.state_dim
+                    ),
+                );
+            }
+            if !term.coefficient.is_finite() {
+                return bad(
+                    "linear_prior",
+                    format!("term {i} has coefficient {}", term.coefficient),
+                );
+            }
+        }
         if self.time_input && !(self.dt.is_finite() && self.dt > 0.0) {
             return bad("dt", format!("{} must be > 0 with a time input", self.dt));
         }
         Ok(())
+    }
+
+    /// `(state, coefficient)` of the linear prior terms of `target`.
+    fn prior_terms(&self, target: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.linear_prior
+            .iter()
+            .filter(move |term| term.target == target)
+            .map(|term| (term.state, term.coefficient))
+    }
+
+    /// `Σ coefficient · x[state]` over the linear prior terms of `target`.
+    pub fn linear_prior_mean(&self, target: usize, x: &[f64]) -> f64 {
+        self.prior_terms(target).map(|(j, c)| c * x[j]).sum()
     }
 }
 
@@ -272,6 +316,7 @@ impl<P: Policy> Predictor<'_, P> {
             .map(|k| {
                 joint.mean[y_idx[k]]
                     + if rel(k) { joint.mean[k] } else { 0.0 }
+                    + self.spec.linear_prior_mean(k, &joint.mean)
                     + shift.map_or(0.0, |s| s[k])
             })
             .collect();
@@ -286,6 +331,30 @@ impl<P: Policy> Predictor<'_, P> {
             }
             if rel(k) && rel(l) {
                 v += c[(k, l)];
+            }
+            if !self.spec.linear_prior.is_empty() {
+                // The prior terms' covariances with the GP output, with the previous state
+                // (relative targets) and with each other.
+                let base = |k: usize| {
+                    let mut rows = vec![y_idx[k]];
+                    if rel(k) {
+                        rows.push(k);
+                    }
+                    rows
+                };
+                for (j, cj) in self.spec.prior_terms(l) {
+                    for r in base(k) {
+                        v += cj * 0.5 * (c[(r, j)] + c[(j, r)]);
+                    }
+                }
+                for (i, ci) in self.spec.prior_terms(k) {
+                    for r in base(l) {
+                        v += ci * 0.5 * (c[(i, r)] + c[(r, i)]);
+                    }
+                    for (j, cj) in self.spec.prior_terms(l) {
+                        v += ci * cj * c[(i, j)];
+                    }
+                }
             }
             v
         });
@@ -324,28 +393,29 @@ impl<P: Policy> Predictor<'_, P> {
         let d0 = self.spec.state_dim;
         let mut zbar = JointBar::zeros(tape.joint.dim());
         let rel = |k: usize| self.spec.targets[k] == Target::Relative;
-        for k in 0..d0 {
-            zbar.mean[tape.y_idx[k]] += next_bar.mean[k];
-            if rel(k) {
-                zbar.mean[k] += next_bar.mean[k];
+        // Each next-state entry is a weighted sum of joint entries: the GP output, the
+        // previous state (relative targets) and the linear prior terms.
+        let terms: Vec<Vec<(usize, f64)>> = (0..d0)
+            .map(|k| {
+                let mut t = vec![(tape.y_idx[k], 1.0)];
+                if rel(k) {
+                    t.push((k, 1.0));
+                }
+                t.extend(self.spec.prior_terms(k));
+                t
+            })
+            .collect();
+        for (k, tk) in terms.iter().enumerate() {
+            for &(r, w) in tk {
+                zbar.mean[r] += w * next_bar.mean[k];
             }
         }
-        for k in 0..d0 {
-            let rows: &[usize] = if rel(k) {
-                &[tape.y_idx[k], k]
-            } else {
-                &[tape.y_idx[k]]
-            };
-            for l in 0..d0 {
-                let cols: &[usize] = if rel(l) {
-                    &[tape.y_idx[l], l]
-                } else {
-                    &[tape.y_idx[l]]
-                };
+        for (k, tk) in terms.iter().enumerate() {
+            for (l, tl) in terms.iter().enumerate() {
                 let g = next_bar.cov[(k, l)];
-                for &r in rows {
-                    for &c in cols {
-                        zbar.cov[(r, c)] += g;
+                for &(r, wr) in tk {
+                    for &(c, wc) in tl {
+                        zbar.cov[(r, c)] += wr * wc * g;
                     }
                 }
             }

@@ -1,7 +1,8 @@
 //! dJ/dψ from the reverse sweep against central finite differences of J, over the variants
 //! the learning loop uses: linear and RBF policies, with and without squashing (symmetric and
 //! non-negative), relative and absolute targets, an angle (trig augmentation), time as an
-//! input, a prior-mean shift, the std and energy terms, discounting and K > 1 starts.
+//! input, a prior-mean shift, linear prior terms, the std and energy terms, discounting and
+//! K > 1 starts.
 
 use faer::Mat;
 use rand::{RngExt, SeedableRng};
@@ -9,7 +10,7 @@ use rand_distr::StandardNormal;
 use vicpilco_gp::fd::{directional, rel_diff};
 use vicpilco_gp::moments::MmModel;
 use vicpilco_gp::{GpModel, Hyper};
-use vicpilco_learn::step::{Predictor, StepSpec, Target};
+use vicpilco_learn::step::{LinearPrior, Predictor, StepSpec, Target};
 use vicpilco_learn::value::{value, ReturnSpec};
 use vicpilco_pilco::cost::{CostSum, EnergyCost, SaturatingCost};
 use vicpilco_pilco::policy::{LinearPolicy, Policy, RbfPolicy};
@@ -45,6 +46,8 @@ struct Variant {
     angles: Vec<usize>,
     time_input: bool,
     targets: Vec<Target>,
+    /// (target, state, coefficient) terms of the targets' prior means.
+    linear_prior: Vec<(usize, usize, f64)>,
     prior_shift: bool,
     w_std: f64,
     energy: bool,
@@ -54,7 +57,8 @@ struct Variant {
     cost_angles: Vec<usize>,
 }
 
-fn check(v: Variant, seed: u64) {
+/// Checks dJ/dψ against finite differences and returns J and dJ/dψ at the variant's ψ₀.
+fn check(v: Variant, seed: u64) -> (f64, Vec<f64>) {
     let mut rng = Rng::seed_from_u64(seed);
     let d0 = v.targets.len();
     let u = 2;
@@ -69,6 +73,15 @@ fn check(v: Variant, seed: u64) {
             .filter(|&i| !v.angles.contains(&i))
             .collect(),
         targets: v.targets.clone(),
+        linear_prior: v
+            .linear_prior
+            .iter()
+            .map(|&(target, state, coefficient)| LinearPrior {
+                target,
+                state,
+                coefficient,
+            })
+            .collect(),
         dt: 0.1,
     };
     let p_in = spec.policy_inputs.len();
@@ -166,6 +179,7 @@ fn check(v: Variant, seed: u64) {
             v.name
         );
     }
+    (j0, grad)
 }
 
 /// Everything but the policy: J (and dJ/dψ) of any policy type.
@@ -214,6 +228,7 @@ fn linear_policy_plain() {
             angles: vec![],
             time_input: false,
             targets: vec![Target::Relative; 3],
+            linear_prior: vec![],
             prior_shift: false,
             w_std: 0.0,
             energy: false,
@@ -238,6 +253,7 @@ fn linear_policy_saturated_mixed_targets_energy() {
             angles: vec![],
             time_input: false,
             targets: vec![Target::Relative, Target::Absolute, Target::Relative],
+            linear_prior: vec![],
             prior_shift: false,
             w_std: -0.25,
             energy: true,
@@ -265,6 +281,7 @@ fn rbf_policy_nonnegative_squash_angle() {
             angles: vec![2],
             time_input: false,
             targets: vec![Target::Relative; 3],
+            linear_prior: vec![],
             prior_shift: false,
             w_std: 0.0,
             energy: false,
@@ -295,6 +312,7 @@ fn rbf_policy_time_prior_mean_energy_two_starts() {
             angles: vec![],
             time_input: true,
             targets: vec![Target::Relative, Target::Relative, Target::Absolute],
+            linear_prior: vec![],
             prior_shift: true,
             w_std: -0.25,
             energy: true,
@@ -316,6 +334,7 @@ fn rbf_policy_unsquashed_absolute() {
             angles: vec![],
             time_input: false,
             targets: vec![Target::Absolute; 2],
+            linear_prior: vec![],
             prior_shift: false,
             w_std: 0.0,
             energy: false,
@@ -325,4 +344,100 @@ fn rbf_policy_unsquashed_absolute() {
         },
         5,
     );
+}
+
+#[test]
+fn rbf_policy_linear_prior_terms() {
+    check(
+        Variant {
+            name: "rbf, linear prior terms on relative and absolute targets",
+            rbf: true,
+            squash: Some(vec![
+                SatRange::Bounded {
+                    a_min: 0.5,
+                    a_max: 3.0,
+                },
+                SatRange::Symmetric { a_max: 1.5 },
+            ]),
+            angles: vec![],
+            time_input: false,
+            targets: vec![Target::Relative, Target::Absolute, Target::Absolute],
+            linear_prior: vec![(1, 0, 0.7), (2, 1, -1.3), (2, 2, 0.4), (0, 2, 0.25)],
+            prior_shift: false,
+            w_std: -0.25,
+            energy: true,
+            gamma: 1.0,
+            starts: 1,
+            cost_angles: vec![],
+        },
+        6,
+    );
+}
+
+/// An absolute target whose prior is its own previous value is a relative target: the same J
+/// and dJ/dψ, through the prior-term code paths instead of the relative ones.
+#[test]
+fn a_unit_prior_on_its_own_state_is_a_relative_target() {
+    let variant = |targets: Vec<Target>, linear_prior: Vec<(usize, usize, f64)>| Variant {
+        name: "linear, relative or unit linear prior",
+        rbf: false,
+        squash: Some(vec![
+            SatRange::Symmetric { a_max: 2.0 },
+            SatRange::Symmetric { a_max: 3.0 },
+        ]),
+        angles: vec![],
+        time_input: false,
+        targets,
+        linear_prior,
+        prior_shift: true,
+        w_std: -0.25,
+        energy: false,
+        gamma: 1.0,
+        starts: 1,
+        cost_angles: vec![],
+    };
+    let (j_rel, g_rel) = check(variant(vec![Target::Relative; 3], vec![]), 7);
+    let (j_lin, g_lin) = check(
+        variant(
+            vec![Target::Relative, Target::Absolute, Target::Absolute],
+            vec![(1, 1, 1.0), (2, 2, 1.0)],
+        ),
+        7,
+    );
+    assert!(rel_diff(j_lin, j_rel, 1e-12) < 1e-12, "{j_lin} {j_rel}");
+    for (a, b) in g_lin.iter().zip(&g_rel) {
+        assert!(rel_diff(*a, *b, 1e-12) < 1e-10, "{g_lin:?}\n{g_rel:?}");
+    }
+}
+
+#[test]
+fn a_linear_prior_term_beyond_the_state_or_not_finite_is_refused() {
+    let mut rng = Rng::seed_from_u64(8);
+    let gp = random_gp(&mut rng, 10, 4, 2);
+    let policy = LinearPolicy::zeros(2, 2);
+    for (term, says) in [
+        ((2, 0, 1.0), "target 2 to state 0"),
+        ((0, 3, 1.0), "target 0 to state 3"),
+        ((1, 0, f64::NAN), "coefficient NaN"),
+    ] {
+        let spec = StepSpec {
+            state_dim: 2,
+            angles: vec![],
+            time_input: false,
+            policy_inputs: vec![0, 1],
+            dyn_inputs: vec![0, 1],
+            targets: vec![Target::Absolute; 2],
+            linear_prior: vec![LinearPrior {
+                target: term.0,
+                state: term.1,
+                coefficient: term.2,
+            }],
+            dt: 0.1,
+        };
+        let err = Predictor::new(&spec, &policy, None, MmModel::with_uncertainty(&gp), None)
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(err.contains("linear_prior") && err.contains(says), "{err}");
+    }
 }

@@ -343,6 +343,14 @@ pub struct LeadState {
     pub prediction_std: f64,
     /// Initial RBF policy length-scale (m) on each lead input.
     pub policy_lengthscale: f64,
+    /// Stiffness k₀ (N/m) of a linear prior mean on the measured contact forces:
+    /// f_{t+1} = k₀ · ℓ_t + GP (ours; absent: the zero prior). Against a surface the
+    /// controller's quasi-static force is k · ℓ; with the zero prior the force model falls
+    /// back to 0 at leads beyond its data, so a reference driven a metre into the face looks
+    /// free (probe `lead-state-scan-deep-jitter`, seed 1). k₀ makes such leads look costly
+    /// instead; in free space the GP learns the −k₀ · ℓ it adds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force_prior_stiffness: Option<f64>,
 }
 
 /// Which policy of a run is its result (`vilta.final_policy`).

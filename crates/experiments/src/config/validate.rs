@@ -253,6 +253,9 @@ impl ArmExperiment {
                     if let Some(l) = &v.lead_state {
                         c.positive("vilta.lead_state.prediction_std", l.prediction_std)?;
                         c.positive("vilta.lead_state.policy_lengthscale", l.policy_lengthscale)?;
+                        if let Some(k) = l.force_prior_stiffness {
+                            c.positive("vilta.lead_state.force_prior_stiffness", k)?;
+                        }
                     }
                     if !v.max_lead_in_search && v.max_lead.is_none() {
                         return Err(c.fail(

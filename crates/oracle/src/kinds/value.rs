@@ -49,6 +49,7 @@ where
                 }
             })
             .collect(),
+        linear_prior: vec![],
         dt: 1.0,
     };
     let max_u = case.vec("maxU")?;
