@@ -232,6 +232,22 @@ impl<'a, P: Policy> Predictor<'a, P> {
         self.policy.n_outputs()
     }
 
+    /// What each next-state entry sums from the step's joint.
+    fn output_terms(&self, y_idx: &[usize]) -> Vec<OutputTerms> {
+        (0..self.spec.state_dim)
+            .map(|k| {
+                let mut base = vec![y_idx[k]];
+                if self.spec.targets[k] == Target::Relative {
+                    base.push(k);
+                }
+                OutputTerms {
+                    base,
+                    prior: self.spec.prior_terms(k).collect(),
+                }
+            })
+            .collect()
+    }
+
     fn shift(&self, t: usize) -> Option<&[f64]> {
         self.prior_shift.map(|s| {
             s.get(t)
@@ -239,6 +255,14 @@ impl<'a, P: Policy> Predictor<'a, P> {
                 .unwrap_or_else(|| s.last().map(Vec::as_slice).unwrap_or(&[]))
         })
     }
+}
+
+/// One next-state entry as a sum of joint entries: `base` with weight 1 (the GP output, and
+/// the previous state for a relative target), then the linear prior terms
+/// `(state, coefficient)`.
+struct OutputTerms {
+    base: Vec<usize>,
+    prior: Vec<(usize, f64)>,
 }
 
 /// What the backward pass of a step needs.
@@ -320,6 +344,7 @@ impl<P: Policy> Predictor<'_, P> {
                     + shift.map_or(0.0, |s| s[k])
             })
             .collect();
+        let terms = self.output_terms(&y_idx);
         let next_cov = Mat::from_fn(d0, d0, |k, l| {
             let c = &joint.cov;
             let mut v = c[(y_idx[k], y_idx[l])];
@@ -332,28 +357,20 @@ impl<P: Policy> Predictor<'_, P> {
             if rel(k) && rel(l) {
                 v += c[(k, l)];
             }
-            if !self.spec.linear_prior.is_empty() {
-                // The prior terms' covariances with the GP output, with the previous state
-                // (relative targets) and with each other.
-                let base = |k: usize| {
-                    let mut rows = vec![y_idx[k]];
-                    if rel(k) {
-                        rows.push(k);
-                    }
-                    rows
-                };
-                for (j, cj) in self.spec.prior_terms(l) {
-                    for r in base(k) {
-                        v += cj * 0.5 * (c[(r, j)] + c[(j, r)]);
-                    }
+            // The prior terms' covariances with the GP output, with the previous state
+            // (relative targets) and with each other.
+            let (tk, tl) = (&terms[k], &terms[l]);
+            for &(j, cj) in &tl.prior {
+                for &r in &tk.base {
+                    v += cj * 0.5 * (c[(r, j)] + c[(j, r)]);
                 }
-                for (i, ci) in self.spec.prior_terms(k) {
-                    for r in base(l) {
-                        v += ci * 0.5 * (c[(i, r)] + c[(r, i)]);
-                    }
-                    for (j, cj) in self.spec.prior_terms(l) {
-                        v += ci * cj * c[(i, j)];
-                    }
+            }
+            for &(i, ci) in &tk.prior {
+                for &r in &tl.base {
+                    v += ci * 0.5 * (c[(i, r)] + c[(r, i)]);
+                }
+                for &(j, cj) in &tl.prior {
+                    v += ci * cj * c[(i, j)];
                 }
             }
             v
@@ -392,17 +409,16 @@ impl<P: Policy> Predictor<'_, P> {
     ) -> Result<GaussianBar, LearnError> {
         let d0 = self.spec.state_dim;
         let mut zbar = JointBar::zeros(tape.joint.dim());
-        let rel = |k: usize| self.spec.targets[k] == Target::Relative;
-        // Each next-state entry is a weighted sum of joint entries: the GP output, the
-        // previous state (relative targets) and the linear prior terms.
-        let terms: Vec<Vec<(usize, f64)>> = (0..d0)
-            .map(|k| {
-                let mut t = vec![(tape.y_idx[k], 1.0)];
-                if rel(k) {
-                    t.push((k, 1.0));
-                }
-                t.extend(self.spec.prior_terms(k));
-                t
+        // Each next-state entry is a weighted sum of joint entries.
+        let terms: Vec<Vec<(usize, f64)>> = self
+            .output_terms(&tape.y_idx)
+            .into_iter()
+            .map(|t| {
+                t.base
+                    .into_iter()
+                    .map(|r| (r, 1.0))
+                    .chain(t.prior)
+                    .collect()
             })
             .collect();
         for (k, tk) in terms.iter().enumerate() {
