@@ -490,6 +490,7 @@ pub fn setup<P>(
                 max_iters: cfg.gp.line_searches,
                 cold_restart: cfg.gp.cold_restart,
                 lengthscale_floor: cfg.gp.lengthscale_floor.clone().unwrap_or_default(),
+                lengthscale_ceiling: cfg.gp.lengthscale_ceiling.clone().unwrap_or_default(),
                 ..TrainOptions::default()
             },
             sparse: SparseTrainOptions {

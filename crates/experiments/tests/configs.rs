@@ -221,6 +221,41 @@ fn a_lengthscale_floor_needs_one_non_negative_value_per_gp_input() {
 }
 
 #[test]
+fn a_lengthscale_ceiling_is_checked_like_the_floor_and_must_lie_above_it() {
+    let text = config::shipped("vilta").unwrap().1;
+    assert_eq!(shipped("vilta").gp.lengthscale_ceiling, None);
+    let with = |extra: &str| {
+        text.replace(
+            "cold_restart = true",
+            &format!("cold_restart = true\n{extra}"),
+        )
+    };
+    // VILTA: x, y, ẋ, ẏ, k_x, k_y, Δx_ref, Δy_ref; a 3 cm ceiling on y.
+    let ceiling = "lengthscale_ceiling = [0, 0.03, 0, 0, 0, 0, 0, 0]";
+    let cfg = config::parse(&with(ceiling), "test.toml").unwrap();
+    assert_eq!(
+        cfg.gp.lengthscale_ceiling.as_deref(),
+        Some(&[0.0, 0.03, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0][..])
+    );
+    assert!(cfg.ours_keys().contains(&"gp.lengthscale_ceiling"));
+    let e = error_of(&with("lengthscale_ceiling = [0, 0.03]"));
+    assert!(
+        e.contains("gp.lengthscale_ceiling") && e.contains('8'),
+        "{e}"
+    );
+    let e = error_of(&with("lengthscale_ceiling = [0, inf, 0, 0, 0, 0, 0, 0]"));
+    assert!(e.contains("gp.lengthscale_ceiling[1]"), "{e}");
+    let floor = "lengthscale_floor = [0, 0.05, 0, 0, 0, 0, 0, 0]";
+    let e = error_of(&with(&format!("{ceiling}\n{floor}")));
+    assert!(
+        e.contains("gp.lengthscale_ceiling[1]") && e.contains("gp.lengthscale_floor[1]"),
+        "{e}"
+    );
+    let floor = "lengthscale_floor = [0, 0.01, 0, 0, 0, 0, 0, 0]";
+    config::parse(&with(&format!("{ceiling}\n{floor}")), "test.toml").unwrap();
+}
+
+#[test]
 fn force_inputs_add_the_contact_forces_to_the_gp_inputs() {
     let text = config::shipped("vilta").unwrap().1;
     let base = shipped("vilta");

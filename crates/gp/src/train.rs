@@ -57,6 +57,12 @@ pub struct TrainOptions {
     /// scale of an input's measurement noise fits that noise (EXPERIMENTS.md, the arm's
     /// velocity model), and the likelihood on a few hundred points can prefer it.
     pub lengthscale_floor: Vec<f64>,
+    /// Per input d, a length-scale above which the objective adds [`ceiling_penalty`] (not in
+    /// PILCO; empty, the default, or 0 for an input: no ceiling). Why: on data where an input
+    /// matters only in a narrow band (the arm's hole is 1 cm wide in y), the likelihood can
+    /// prefer a length-scale that smears the band away; PILCO's `hypCurb` only stops
+    /// length-scales near 100 input standard deviations.
+    pub lengthscale_ceiling: Vec<f64>,
 }
 
 impl Default for TrainOptions {
@@ -70,6 +76,7 @@ impl Default for TrainOptions {
             jitter: JitterPolicy::default(),
             cold_restart: false,
             lengthscale_floor: Vec::new(),
+            lengthscale_ceiling: Vec::new(),
         }
     }
 }
@@ -216,15 +223,24 @@ fn objective(
         e.value += p;
         e.grad.iter_mut().zip(&g).for_each(|(a, b)| *a += b);
     }
-    if !opts.lengthscale_floor.is_empty() {
-        let (p, g) = floor_penalty(h, &opts.lengthscale_floor);
-        e.value += p;
-        e.grad.iter_mut().zip(&g).for_each(|(a, b)| *a += b);
+    for (bounds, penalty) in [
+        (
+            &opts.lengthscale_floor,
+            floor_penalty as fn(&Hyper, &[f64]) -> _,
+        ),
+        (&opts.lengthscale_ceiling, ceiling_penalty),
+    ] {
+        if !bounds.is_empty() {
+            let (p, g) = penalty(h, bounds);
+            e.value += p;
+            e.grad.iter_mut().zip(&g).for_each(|(a, b)| *a += b);
+        }
     }
     Ok((e, plain))
 }
 
-/// Power of [`floor_penalty`]: high, like `hypCurb`'s, so the penalty is a wall.
+/// Power of [`floor_penalty`] and [`ceiling_penalty`]: high, like `hypCurb`'s, so the penalty
+/// is a wall.
 pub const FLOOR_PENALTY_POWER: i32 = 30;
 
 /// One-sided penalty keeping length-scale d above about half of `floor[d]`, with its gradient
@@ -233,16 +249,30 @@ pub const FLOOR_PENALTY_POWER: i32 = 30;
 /// 1 at floor_d / 2 and 1e6 at floor_d / 3. Inputs with floor 0 (or beyond `floor`'s
 /// length) are free.
 pub fn floor_penalty(hyp: &Hyper, floor: &[f64]) -> (f64, Vec<f64>) {
+    octave_wall(hyp, floor, -1.0)
+}
+
+/// The mirror of [`floor_penalty`]: keeps length-scale d below about twice `ceiling[d]`, with
+/// `z_d = max(0, log ℓ_d − log ceiling_d) / log 2`. It is 0 at and below the ceiling, below
+/// 1e-4 under 1.6 ceiling_d, 1 at 2 ceiling_d and 1e6 at 3 ceiling_d. Inputs with ceiling 0
+/// (or beyond `ceiling`'s length) are free.
+pub fn ceiling_penalty(hyp: &Hyper, ceiling: &[f64]) -> (f64, Vec<f64>) {
+    octave_wall(hyp, ceiling, 1.0)
+}
+
+/// `Σ_d z_d^p`, `z_d = max(0, side · (log ℓ_d − log bound_d)) / log 2`, and its gradient in
+/// PILCO order; `side` is −1 for a floor and +1 for a ceiling.
+fn octave_wall(hyp: &Hyper, bound: &[f64], side: f64) -> (f64, Vec<f64>) {
     let d = hyp.dim();
     let mut grad = vec![0.0; d + 2];
     let mut value = 0.0;
     let (p, octave) = (FLOOR_PENALTY_POWER, std::f64::consts::LN_2);
-    for (c, &f) in floor.iter().enumerate().take(d) {
-        if f > 0.0 {
-            let z = (f.ln() - hyp.log_ls[c]) / octave;
+    for (c, &b) in bound.iter().enumerate().take(d) {
+        if b > 0.0 {
+            let z = side * (hyp.log_ls[c] - b.ln()) / octave;
             if z > 0.0 {
                 value += z.powi(p);
-                grad[c] = -f64::from(p) * z.powi(p - 1) / octave;
+                grad[c] = side * f64::from(p) * z.powi(p - 1) / octave;
             }
         }
     }

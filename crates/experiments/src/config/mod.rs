@@ -216,12 +216,19 @@ pub struct GpConfig {
     /// better fit per output (ours; PILCO only warm-starts from the previous fit, which kept
     /// the arm's velocity model at a length-scale of the sensor noise, EXPERIMENTS.md).
     pub cold_restart: bool,
-    /// Per GP input (x, y, ẋ, ẏ, [f_x, f_y,] [t,] actions), a length-scale floor: training adds a wall
+    /// Per GP input (x, y, ẋ, ẏ, [ℓ_x, ℓ_y,] [f_x, f_y,] [t,] actions), a length-scale floor: training adds a wall
     /// penalty below about half of it (`vicpilco_gp::train::floor_penalty`; 0 = free). Ours,
     /// not PILCO's: a length-scale at an input's sensor-noise scale fits the noise
     /// (EXPERIMENTS.md, "Why an update drops an inserting policy": measured, it did not help).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lengthscale_floor: Option<Vec<f64>>,
+    /// Per GP input, in `lengthscale_floor`'s order, a length-scale ceiling: training adds a
+    /// wall penalty above about twice it (`vicpilco_gp::train::ceiling_penalty`; 0 = free).
+    /// Ours, not PILCO's: the VILTA runs that press the face below the hole fit x-dynamics
+    /// models whose y length-scale (3.6-5 m, or 7-11 cm) smears the 1 cm channel away, so the
+    /// model sees no gain in moving along the face (EXPERIMENTS.md, twenty-sixth session).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lengthscale_ceiling: Option<Vec<f64>>,
     /// Also feed the measured contact forces (f_x, f_y) to the dynamics GP, after (x, y, ẋ, ẏ).
     /// Ours, not the thesis's (its inputs are the motion states only, eq. 4-3/4-5, because
     /// "the forces follow from the states, gains and reference"). Under VILTA the reference is
@@ -433,6 +440,9 @@ impl ArmExperiment {
         }
         if self.gp.lengthscale_floor.is_some() {
             keys.push("gp.lengthscale_floor");
+        }
+        if self.gp.lengthscale_ceiling.is_some() {
+            keys.push("gp.lengthscale_ceiling");
         }
         if self.gp.force_inputs {
             keys.push("gp.force_inputs");

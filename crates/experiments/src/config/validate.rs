@@ -156,19 +156,33 @@ impl ArmExperiment {
         c.at_least("gp.n_inducing", g.n_inducing, 1)?;
         c.at_least("gp.hyper_points", g.hyper_points, 1)?;
         c.at_least("gp.line_searches", g.line_searches as usize, 1)?;
-        if let Some(floor) = &g.lengthscale_floor {
-            let d = self.gp_input_dim();
-            if floor.len() != d {
+        let d = self.gp_input_dim();
+        for (key, bounds) in [
+            ("gp.lengthscale_floor", &g.lengthscale_floor),
+            ("gp.lengthscale_ceiling", &g.lengthscale_ceiling),
+        ] {
+            let Some(bounds) = bounds else { continue };
+            if bounds.len() != d {
                 return Err(c.fail(
-                    "gp.lengthscale_floor",
-                    format!("needs one value per GP input ({d}), got {}", floor.len()),
+                    key,
+                    format!("needs one value per GP input ({d}), got {}", bounds.len()),
                 ));
             }
-            for (i, &f) in floor.iter().enumerate() {
-                if !(f.is_finite() && f >= 0.0) {
+            for (i, &b) in bounds.iter().enumerate() {
+                if !(b.is_finite() && b >= 0.0) {
                     return Err(c.fail(
-                        &format!("gp.lengthscale_floor[{i}]"),
-                        format!("must be finite and ≥ 0, got {f}"),
+                        &format!("{key}[{i}]"),
+                        format!("must be finite and ≥ 0, got {b}"),
+                    ));
+                }
+            }
+        }
+        if let (Some(floor), Some(ceiling)) = (&g.lengthscale_floor, &g.lengthscale_ceiling) {
+            for (i, (&f, &u)) in floor.iter().zip(ceiling).enumerate() {
+                if f > 0.0 && u > 0.0 && f >= u {
+                    return Err(c.fail(
+                        &format!("gp.lengthscale_ceiling[{i}]"),
+                        format!("must be above gp.lengthscale_floor[{i}] = {f}, got {u}"),
                     ));
                 }
             }

@@ -362,3 +362,71 @@ fn a_lengthscale_floor_keeps_training_off_the_noise_scale() {
     let o = &rep.outputs[0];
     assert!((o.objective - (plain + curb + extra)).abs() < 1e-9 * o.objective.abs().max(1.0));
 }
+
+#[test]
+fn ceiling_penalty_mirrors_the_floor_and_matches_finite_differences() {
+    let mut rng = ChaCha8Rng::seed_from_u64(37);
+    let mut h = random_hyp(4, &mut rng);
+    // Input 0 at 2.2 times its ceiling, 1 at twice it, 2 below it, 3 free.
+    let ceiling = [0.3, 0.2, 0.5, 0.0];
+    h.log_ls[0] = (2.2f64 * 0.3).ln();
+    h.log_ls[1] = (0.4f64).ln();
+    h.log_ls[2] = (0.1f64).ln();
+    h.log_ls[3] = (1e6f64).ln();
+    let (value, grad) = ceiling_penalty(&h, &ceiling);
+    let z0 = 2.2f64.ln() / std::f64::consts::LN_2;
+    assert!((value - z0.powi(30) - 1.0).abs() <= 1e-12 * value);
+    assert!(grad[0] > 0.0 && grad[1] > 0.0);
+    assert_eq!(&grad[2..], &[0.0; 4]);
+    let mut f = |p: &[f64]| ceiling_penalty(&Hyper::from_pilco(p), &ceiling);
+    check_gradient(&mut f, &h.to_pilco(), 1e-4, 1e-6);
+    // The ceiling is the floor reflected through the bound: ℓ = c·r costs what ℓ = c/r does.
+    let mut below = h.clone();
+    below.log_ls[0] = (0.3f64 / 2.2).ln();
+    let floored = floor_penalty(&below, &[0.3]).0;
+    assert!((ceiling_penalty(&h, &[0.3]).0 - floored).abs() <= 1e-12 * floored);
+    // Three times the ceiling is a wall.
+    h.log_ls[0] = (0.9f64).ln();
+    assert!(ceiling_penalty(&h, &ceiling).0 > 1e5);
+}
+
+#[test]
+fn a_lengthscale_ceiling_keeps_an_ignored_input_in_play() {
+    // The targets do not depend on input 2, so its free length-scale runs long; a ceiling a
+    // quarter of that holds it between the ceiling and three times it (penalty 1e6), and the
+    // other inputs' length-scales stay free.
+    let (x2, y) = data(60, 2, 3);
+    let mut rng = ChaCha8Rng::seed_from_u64(41);
+    let x = Mat::from_fn(60, 3, |i, j| {
+        if j < 2 {
+            x2[(i, j)]
+        } else {
+            rng.sample::<f64, _>(StandardNormal)
+        }
+    });
+    let init = vec![start(&x, &y)];
+    let targets = Mat::from_fn(60, 1, |i, _| y[i]);
+    let fit = |opts: &TrainOptions| train(x.as_ref(), targets.as_ref(), &init, opts).unwrap();
+    let free = fit(&TrainOptions::default()).0;
+    let l_free = free[0].log_ls[2].exp();
+    assert!(l_free > 4.0, "input 2 should be all but ignored: {l_free}");
+    let ceiling = vec![0.0, 0.0, l_free / 4.0];
+    let opts = TrainOptions {
+        lengthscale_ceiling: ceiling.clone(),
+        ..Default::default()
+    };
+    let (held, rep) = fit(&opts);
+    let l_held = held[0].log_ls[2].exp();
+    assert!(
+        l_held > ceiling[2] && l_held < 3.0 * ceiling[2],
+        "{l_free} → {l_held}"
+    );
+    // The reported objective includes the ceiling penalty.
+    let plain = nlml(x.as_ref(), &y, &held[0]).unwrap().value;
+    let curb = HypCurb::default()
+        .penalty(&held[0], &input_std(x.as_ref()))
+        .0;
+    let extra = ceiling_penalty(&held[0], &ceiling).0;
+    let o = &rep.outputs[0];
+    assert!((o.objective - (plain + curb + extra)).abs() < 1e-9 * o.objective.abs().max(1.0));
+}
