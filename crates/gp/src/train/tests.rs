@@ -326,6 +326,20 @@ fn floor_penalty_gradient_matches_finite_differences_and_leaves_free_inputs_alon
     assert!(floor_penalty(&h, &floor).0 > 1e5);
 }
 
+/// Output 0's reported objective is its plain nlml plus PILCO's `hypCurb` plus `extra`.
+fn assert_objective_is_penalised_nlml(
+    x: &Mat<f64>,
+    y: &[f64],
+    held: &Hyper,
+    rep: &TrainReport,
+    extra: f64,
+) {
+    let plain = nlml(x.as_ref(), y, held).unwrap().value;
+    let curb = HypCurb::default().penalty(held, &input_std(x.as_ref())).0;
+    let o = &rep.outputs[0];
+    assert!((o.objective - (plain + curb + extra)).abs() < 1e-9 * o.objective.abs().max(1.0));
+}
+
 #[test]
 fn a_lengthscale_floor_keeps_training_off_the_noise_scale() {
     // A floor 4× above a length-scale's free optimum holds it at the penalty's wall, between
@@ -354,13 +368,8 @@ fn a_lengthscale_floor_keeps_training_off_the_noise_scale() {
         "{l_free} → {l_held}"
     );
     // The reported objective includes the floor penalty.
-    let plain = nlml(x.as_ref(), &y, &held[0]).unwrap().value;
-    let curb = HypCurb::default()
-        .penalty(&held[0], &input_std(x.as_ref()))
-        .0;
     let extra = floor_penalty(&held[0], &floor).0;
-    let o = &rep.outputs[0];
-    assert!((o.objective - (plain + curb + extra)).abs() < 1e-9 * o.objective.abs().max(1.0));
+    assert_objective_is_penalised_nlml(&x, &y, &held[0], &rep, extra);
 }
 
 #[test]
@@ -422,11 +431,6 @@ fn a_lengthscale_ceiling_keeps_an_ignored_input_in_play() {
         "{l_free} → {l_held}"
     );
     // The reported objective includes the ceiling penalty.
-    let plain = nlml(x.as_ref(), &y, &held[0]).unwrap().value;
-    let curb = HypCurb::default()
-        .penalty(&held[0], &input_std(x.as_ref()))
-        .0;
     let extra = ceiling_penalty(&held[0], &ceiling).0;
-    let o = &rep.outputs[0];
-    assert!((o.objective - (plain + curb + extra)).abs() < 1e-9 * o.objective.abs().max(1.0));
+    assert_objective_is_penalised_nlml(&x, &y, &held[0], &rep, extra);
 }
