@@ -405,7 +405,10 @@ pub fn rbf_policy(cfg: &ArmExperiment, seed: u64) -> Result<RbfPolicy, Experimen
         }
     }
     let ls = cfg.policy.lengthscales.unwrap_or([1.0; 4]);
-    let lead_ls = cfg.lead_state().map_or(1.0, |l| l.policy_lengthscale);
+    let lead_ls = cfg
+        .lead_state()
+        .and_then(|l| l.policy_lengthscale)
+        .unwrap_or(1.0);
     let log_ls = Mat::from_fn(n_in, m, |k, _| ls.get(k).copied().unwrap_or(lead_ls).ln());
     Ok(RbfPolicy::new(
         centres,

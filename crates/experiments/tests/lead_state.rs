@@ -59,6 +59,43 @@ fn the_lead_adds_two_state_entries_gp_inputs_and_policy_inputs() {
     }
 }
 
+/// The lead inputs' initial length-scale belongs to an RBF policy: required with one, refused
+/// with a linear policy, which has none.
+#[test]
+fn the_lead_length_scale_follows_the_policy_kind() {
+    let without_ls = "[vilta.lead_state]\nprediction_std = 0.001\n";
+    let linear = |lead: &str| {
+        with_lead(lead)
+            .replace("kind = \"rbf\"", "kind = \"linear\"")
+            .replace("n_basis = ", "# n_basis = ")
+            .replace("lengthscales = [", "# lengthscales = [")
+            .replace("snr = ", "# snr = ")
+    };
+    let err = |text: &str| config::parse(text, "lead.toml").unwrap_err().to_string();
+    let missing = err(&with_lead(without_ls));
+    assert!(
+        missing.contains("vilta.lead_state.policy_lengthscale")
+            && missing.contains("required for an RBF policy"),
+        "{missing}"
+    );
+    let refused = err(&linear(LEAD_TABLE));
+    assert!(
+        refused.contains("vilta.lead_state.policy_lengthscale")
+            && refused.contains("does not apply to a linear policy"),
+        "{refused}"
+    );
+    let cfg = config::parse(&linear(without_ls), "lead.toml").unwrap();
+    // A linear policy on (x, y, ẋ, ẏ, ℓ_x, ℓ_y) with 4 outputs: m (n_π + 1) = 4 · 7.
+    assert_eq!((cfg.n_policy_inputs(), cfg.n_params()), (6, 28));
+    let written = serde_json::to_value(&cfg).unwrap();
+    assert!(
+        written["vilta"]["lead_state"]
+            .get("policy_lengthscale")
+            .is_none(),
+        "{written}"
+    );
+}
+
 /// One quick update learns on the 8-entry state: every recorded state carries the lead, equal
 /// to the reference less the TCP, and the long-term prediction has 8 entries per step.
 #[test]

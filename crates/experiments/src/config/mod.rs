@@ -348,8 +348,10 @@ pub struct LeadState {
     /// Std (m) of each lead entry of the prediction's start distribution; the reference starts
     /// at the start pose, so the start's lead is 0.
     pub prediction_std: f64,
-    /// Initial RBF policy length-scale (m) on each lead input.
-    pub policy_lengthscale: f64,
+    /// Initial RBF policy length-scale (m) on each lead input: required with an RBF policy,
+    /// refused with a linear one, which has no length-scales.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub policy_lengthscale: Option<f64>,
     /// Stiffness k₀ (N/m) of a linear prior mean on the measured contact forces:
     /// f_{t+1} = k₀ · ℓ_t + GP (ours; absent: the zero prior). Against a surface the
     /// controller's quasi-static force is k · ℓ; with the zero prior the force model falls

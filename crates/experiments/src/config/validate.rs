@@ -266,7 +266,16 @@ impl ArmExperiment {
                     }
                     if let Some(l) = &v.lead_state {
                         c.positive("vilta.lead_state.prediction_std", l.prediction_std)?;
-                        c.positive("vilta.lead_state.policy_lengthscale", l.policy_lengthscale)?;
+                        let key = "vilta.lead_state.policy_lengthscale";
+                        match p.kind {
+                            PolicyKind::Rbf => {
+                                c.require(key, &l.policy_lengthscale, "for an RBF policy")?;
+                                c.positive(key, l.policy_lengthscale.unwrap_or(0.0))?;
+                            }
+                            PolicyKind::Linear => {
+                                c.forbid(key, &l.policy_lengthscale, "to a linear policy")?;
+                            }
+                        }
                         if let Some(k) = l.force_prior_stiffness {
                             c.positive("vilta.lead_state.force_prior_stiffness", k)?;
                         }
