@@ -57,6 +57,26 @@ struct Variant {
     cost_angles: Vec<usize>,
 }
 
+/// A linear, unsquashed policy on three relative targets with no cost extras; each test
+/// names only what it changes.
+fn plain(name: &'static str) -> Variant {
+    Variant {
+        name,
+        rbf: false,
+        squash: None,
+        angles: vec![],
+        time_input: false,
+        targets: vec![Target::Relative; 3],
+        linear_prior: vec![],
+        prior_shift: false,
+        w_std: 0.0,
+        energy: false,
+        gamma: 1.0,
+        starts: 1,
+        cost_angles: vec![],
+    }
+}
+
 /// Checks dJ/dψ against finite differences and returns J and dJ/dψ at the variant's ψ₀.
 fn check(v: Variant, seed: u64) -> (f64, Vec<f64>) {
     let mut rng = Rng::seed_from_u64(seed);
@@ -220,46 +240,22 @@ fn rbf_template(d: usize, e: usize) -> RbfPolicy {
 
 #[test]
 fn linear_policy_plain() {
-    check(
-        Variant {
-            name: "linear, no squash, relative",
-            rbf: false,
-            squash: None,
-            angles: vec![],
-            time_input: false,
-            targets: vec![Target::Relative; 3],
-            linear_prior: vec![],
-            prior_shift: false,
-            w_std: 0.0,
-            energy: false,
-            gamma: 1.0,
-            starts: 1,
-            cost_angles: vec![],
-        },
-        1,
-    );
+    check(plain("linear, no squash, relative"), 1);
 }
 
 #[test]
 fn linear_policy_saturated_mixed_targets_energy() {
     check(
         Variant {
-            name: "linear, symmetric squash, mixed targets, energy, std",
-            rbf: false,
             squash: Some(vec![
                 SatRange::Symmetric { a_max: 2.0 },
                 SatRange::Symmetric { a_max: 3.0 },
             ]),
-            angles: vec![],
-            time_input: false,
             targets: vec![Target::Relative, Target::Absolute, Target::Relative],
-            linear_prior: vec![],
-            prior_shift: false,
             w_std: -0.25,
             energy: true,
             gamma: 0.9,
-            starts: 1,
-            cost_angles: vec![],
+            ..plain("linear, symmetric squash, mixed targets, energy, std")
         },
         2,
     );
@@ -269,7 +265,6 @@ fn linear_policy_saturated_mixed_targets_energy() {
 fn rbf_policy_nonnegative_squash_angle() {
     check(
         Variant {
-            name: "rbf, partial non-negative squash, angle in dynamics and cost",
             rbf: true,
             squash: Some(vec![
                 SatRange::Bounded {
@@ -279,15 +274,8 @@ fn rbf_policy_nonnegative_squash_angle() {
                 SatRange::Symmetric { a_max: 1.5 },
             ]),
             angles: vec![2],
-            time_input: false,
-            targets: vec![Target::Relative; 3],
-            linear_prior: vec![],
-            prior_shift: false,
-            w_std: 0.0,
-            energy: false,
-            gamma: 1.0,
-            starts: 1,
             cost_angles: vec![2],
+            ..plain("rbf, partial non-negative squash, angle in dynamics and cost")
         },
         3,
     );
@@ -297,7 +285,6 @@ fn rbf_policy_nonnegative_squash_angle() {
 fn rbf_policy_time_prior_mean_energy_two_starts() {
     check(
         Variant {
-            name: "rbf, time input, prior mean, energy, std, K = 2",
             rbf: true,
             squash: Some(vec![
                 SatRange::Bounded {
@@ -309,16 +296,13 @@ fn rbf_policy_time_prior_mean_energy_two_starts() {
                     a_max: 2.0,
                 },
             ]),
-            angles: vec![],
             time_input: true,
             targets: vec![Target::Relative, Target::Relative, Target::Absolute],
-            linear_prior: vec![],
             prior_shift: true,
             w_std: -0.25,
             energy: true,
-            gamma: 1.0,
             starts: 2,
-            cost_angles: vec![],
+            ..plain("rbf, time input, prior mean, energy, std, K = 2")
         },
         4,
     );
@@ -328,19 +312,9 @@ fn rbf_policy_time_prior_mean_energy_two_starts() {
 fn rbf_policy_unsquashed_absolute() {
     check(
         Variant {
-            name: "rbf, no squash, absolute targets",
             rbf: true,
-            squash: None,
-            angles: vec![],
-            time_input: false,
             targets: vec![Target::Absolute; 2],
-            linear_prior: vec![],
-            prior_shift: false,
-            w_std: 0.0,
-            energy: false,
-            gamma: 1.0,
-            starts: 1,
-            cost_angles: vec![],
+            ..plain("rbf, no squash, absolute targets")
         },
         5,
     );
@@ -350,7 +324,6 @@ fn rbf_policy_unsquashed_absolute() {
 fn rbf_policy_linear_prior_terms() {
     check(
         Variant {
-            name: "rbf, linear prior terms on relative and absolute targets",
             rbf: true,
             squash: Some(vec![
                 SatRange::Bounded {
@@ -359,16 +332,11 @@ fn rbf_policy_linear_prior_terms() {
                 },
                 SatRange::Symmetric { a_max: 1.5 },
             ]),
-            angles: vec![],
-            time_input: false,
             targets: vec![Target::Relative, Target::Absolute, Target::Absolute],
             linear_prior: vec![(1, 0, 0.7), (2, 1, -1.3), (2, 2, 0.4), (0, 2, 0.25)],
-            prior_shift: false,
             w_std: -0.25,
             energy: true,
-            gamma: 1.0,
-            starts: 1,
-            cost_angles: vec![],
+            ..plain("rbf, linear prior terms on relative and absolute targets")
         },
         6,
     );
@@ -379,22 +347,15 @@ fn rbf_policy_linear_prior_terms() {
 #[test]
 fn a_unit_prior_on_its_own_state_is_a_relative_target() {
     let variant = |targets: Vec<Target>, linear_prior: Vec<(usize, usize, f64)>| Variant {
-        name: "linear, relative or unit linear prior",
-        rbf: false,
         squash: Some(vec![
             SatRange::Symmetric { a_max: 2.0 },
             SatRange::Symmetric { a_max: 3.0 },
         ]),
-        angles: vec![],
-        time_input: false,
         targets,
         linear_prior,
         prior_shift: true,
         w_std: -0.25,
-        energy: false,
-        gamma: 1.0,
-        starts: 1,
-        cost_angles: vec![],
+        ..plain("linear, relative or unit linear prior")
     };
     let (j_rel, g_rel) = check(variant(vec![Target::Relative; 3], vec![]), 7);
     let (j_lin, g_lin) = check(
