@@ -425,27 +425,14 @@ where
             config: meta.config.clone(),
             ..c.summary.clone()
         },
-        None => Summary {
-            experiment: name.to_string(),
-            seed: opts.seed,
-            controller: meta.controller.clone(),
-            policy: meta.policy.clone(),
-            n_params: meta.n_params,
-            initial_return: None,
-            episodes: Vec::new(),
-            solved_at_episode: None,
-            interaction_s: 0.0,
-            wall_s: 0.0,
-            config: meta.config.clone(),
-            thesis_reference: Vec::new(),
-            constant_gain_return: None,
-            constant_gain_inserted: None,
-            final_eval: None,
-            final_gains: None,
-            final_mean_gains: None,
-            sessions: Vec::new(),
-            replayed_from: None,
-        },
+        None => Summary::new(
+            name,
+            opts.seed,
+            meta.controller.clone(),
+            &meta.policy,
+            meta.n_params,
+            meta.config.clone(),
+        ),
     };
     summary
         .sessions

@@ -205,6 +205,38 @@ pub enum WriteError {
 }
 
 impl Summary {
+    /// The summary of a run before its first update: what identifies it, nothing measured.
+    pub fn new(
+        experiment: &str,
+        seed: u64,
+        controller: Option<String>,
+        policy: &str,
+        n_params: usize,
+        config: serde_json::Value,
+    ) -> Summary {
+        Summary {
+            experiment: experiment.to_string(),
+            seed,
+            controller,
+            policy: policy.to_string(),
+            n_params,
+            initial_return: None,
+            episodes: Vec::new(),
+            solved_at_episode: None,
+            interaction_s: 0.0,
+            wall_s: 0.0,
+            config,
+            thesis_reference: Vec::new(),
+            constant_gain_return: None,
+            constant_gain_inserted: None,
+            final_eval: None,
+            final_gains: None,
+            final_mean_gains: None,
+            sessions: Vec::new(),
+            replayed_from: None,
+        }
+    }
+
     fn check_finite(&self) -> Result<(), WriteError> {
         let bad = |what: String, value: f64| Err(WriteError::NonFinite { what, value });
         for e in &self.episodes {
@@ -293,12 +325,6 @@ mod tests {
         let mut e = ep(1, true);
         e.recorded_return = f64::NAN;
         let s = Summary {
-            experiment: "x".into(),
-            seed: 1,
-            controller: None,
-            policy: "rbf".into(),
-            n_params: 3,
-            initial_return: None,
             episodes: vec![EpisodeSummary {
                 record: e,
                 colour: "green".into(),
@@ -306,18 +332,7 @@ mod tests {
                 max_force: None,
                 start_y: None,
             }],
-            solved_at_episode: None,
-            interaction_s: 0.0,
-            wall_s: 0.0,
-            config: serde_json::Value::Null,
-            thesis_reference: Vec::new(),
-            constant_gain_return: None,
-            constant_gain_inserted: None,
-            final_eval: None,
-            final_gains: None,
-            final_mean_gains: None,
-            sessions: Vec::new(),
-            replayed_from: None,
+            ..Summary::new("x", 1, None, "rbf", 3, serde_json::Value::Null)
         };
         let dir = std::env::temp_dir();
         assert!(matches!(s.write(&dir), Err(WriteError::NonFinite { .. })));

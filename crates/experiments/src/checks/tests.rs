@@ -35,25 +35,18 @@ fn summary(returns: &[(f64, bool)]) -> Summary {
         })
         .collect();
     Summary {
-        experiment: "vil-gic-rbf10".into(),
-        seed: 1,
-        controller: Some("gic".into()),
-        policy: "rbf".into(),
-        n_params: 68,
         initial_return: Some(120.0),
         episodes,
-        solved_at_episode: None,
-        interaction_s: 0.0,
         wall_s: 100.0 * returns.len() as f64,
-        config: serde_json::Value::Null,
-        thesis_reference: Vec::new(),
         constant_gain_return: Some(110.0),
-        constant_gain_inserted: None,
-        final_eval: None,
-        final_gains: None,
-        final_mean_gains: None,
-        sessions: Vec::new(),
-        replayed_from: None,
+        ..Summary::new(
+            "vil-gic-rbf10",
+            1,
+            Some("gic".into()),
+            "rbf",
+            68,
+            serde_json::Value::Null,
+        )
     }
 }
 
