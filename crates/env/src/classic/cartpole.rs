@@ -61,7 +61,7 @@
 //! `(x + l sin θ, −l cos θ)` from `(0, l)`. The tip threshold 0.1 m is 0.4 cost widths.
 
 use super::ode;
-use super::{ClassicEnv, ClassicSystem, Dynamics, Scenario, SuccessTest};
+use super::{non_negative, positive, ClassicEnv, ClassicSystem, Dynamics, Scenario, SuccessTest};
 use crate::EnvError;
 use std::f64::consts::PI;
 
@@ -149,24 +149,11 @@ impl ClassicSystem for CartPolePhysics {
     }
 
     fn validate(&self) -> Result<(), EnvError> {
-        for (field, v, nonneg) in [
-            ("cartpole.pole_length", self.pole_length, false),
-            ("cartpole.pole_mass", self.pole_mass, false),
-            ("cartpole.cart_mass", self.cart_mass, false),
-            ("cartpole.friction", self.friction, true),
-            ("cartpole.gravity", self.gravity, true),
-        ] {
-            let ok = v.is_finite() && if nonneg { v >= 0.0 } else { v > 0.0 };
-            if !ok {
-                let req = if nonneg {
-                    "finite and ≥ 0"
-                } else {
-                    "finite and > 0"
-                };
-                return Err(EnvError::config(field, v, req));
-            }
-        }
-        Ok(())
+        positive("cartpole.pole_length", self.pole_length)?;
+        positive("cartpole.pole_mass", self.pole_mass)?;
+        positive("cartpole.cart_mass", self.cart_mass)?;
+        non_negative("cartpole.friction", self.friction)?;
+        non_negative("cartpole.gravity", self.gravity)
     }
 }
 

@@ -351,13 +351,7 @@ impl<P: ClassicSystem> Scenario<P> {
         }
         length("scenario.noise_std", self.noise_std.len(), n)?;
         for (i, &s) in self.noise_std.iter().enumerate() {
-            if !(s.is_finite() && s >= 0.0) {
-                return Err(EnvError::config(
-                    format!("scenario.noise_std[{i}]"),
-                    s,
-                    "finite and ≥ 0",
-                ));
-            }
+            non_negative(&format!("scenario.noise_std[{i}]"), s)?;
         }
         positive("scenario.max_action", self.max_action)?;
         indices("scenario.angle_indices", &self.angle_indices, n)?;
@@ -384,11 +378,19 @@ impl<P: ClassicSystem> Scenario<P> {
     }
 }
 
-fn positive(field: &str, v: f64) -> Result<(), EnvError> {
+pub(super) fn positive(field: &str, v: f64) -> Result<(), EnvError> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
         Err(EnvError::config(field, v, "finite and > 0"))
+    }
+}
+
+pub(super) fn non_negative(field: &str, v: f64) -> Result<(), EnvError> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(EnvError::config(field, v, "finite and ≥ 0"))
     }
 }
 

@@ -62,7 +62,7 @@
 //! of the release).
 
 use super::ode;
-use super::{ClassicEnv, ClassicSystem, Dynamics, Scenario, SuccessTest};
+use super::{non_negative, positive, ClassicEnv, ClassicSystem, Dynamics, Scenario, SuccessTest};
 use crate::EnvError;
 use std::f64::consts::PI;
 
@@ -121,23 +121,10 @@ impl ClassicSystem for PendulumPhysics {
     }
 
     fn validate(&self) -> Result<(), EnvError> {
-        for (field, v, nonneg) in [
-            ("pendulum.length", self.length, false),
-            ("pendulum.mass", self.mass, false),
-            ("pendulum.gravity", self.gravity, true),
-            ("pendulum.friction", self.friction, true),
-        ] {
-            let ok = v.is_finite() && if nonneg { v >= 0.0 } else { v > 0.0 };
-            if !ok {
-                let req = if nonneg {
-                    "finite and ≥ 0"
-                } else {
-                    "finite and > 0"
-                };
-                return Err(EnvError::config(field, v, req));
-            }
-        }
-        Ok(())
+        positive("pendulum.length", self.length)?;
+        positive("pendulum.mass", self.mass)?;
+        non_negative("pendulum.gravity", self.gravity)?;
+        non_negative("pendulum.friction", self.friction)
     }
 }
 
