@@ -3,8 +3,7 @@ use std::collections::BTreeMap;
 use vicpilco_env::StepInfo;
 
 fn cfg(name: &str) -> ArmExperiment {
-    let (file, text) = crate::config::shipped(name).unwrap();
-    crate::config::parse(text, file).unwrap()
+    crate::load_config(name, None).unwrap().unwrap()
 }
 
 #[test]

@@ -51,8 +51,7 @@ fn summary(returns: &[(f64, bool)]) -> Summary {
 }
 
 fn cfg(name: &str) -> ArmExperiment {
-    let (file, text) = crate::config::shipped(name).unwrap();
-    crate::config::parse(text, file).unwrap()
+    crate::load_config(name, None).unwrap().unwrap()
 }
 
 fn verdict(checks: &[ThesisCheck], claim: &str) -> Option<bool> {
