@@ -1,7 +1,7 @@
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
-use vicpilco_learn::outer::{EpisodeRecord, LoopObserver, Phase};
+use vicpilco_learn::record::{EpisodeRecord, LoopObserver, Phase};
 
 #[derive(clap::Args)]
 pub struct Args {

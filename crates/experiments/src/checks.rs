@@ -7,7 +7,8 @@ use crate::summary::{EpisodeSummary, FinalEval, SeedRule, Summary, ThesisCheck};
 use crate::{arm, ExperimentError, RunOptions};
 use vicpilco_env::Environment;
 use vicpilco_learn::data::Rollout;
-use vicpilco_learn::outer::{derive_seed, rollout, LoopOutcome, LoopSetup};
+use vicpilco_learn::outer::{derive_seed, rollout, LoopSetup};
+use vicpilco_learn::record::LoopOutcome;
 use vicpilco_pilco::policy::Policy;
 // The vil-sic claim that needs a GIC run of the same seed: `vicpilco acceptance` decides it by
 // comparing the two runs' `final_mean_gains` k_y.

@@ -37,7 +37,8 @@ use std::time::Instant;
 use summary::{write_json_atomic, RunSession, Summary};
 use vicpilco_env::classic::{CartPoleScenario, PendulumScenario};
 use vicpilco_env::Environment;
-use vicpilco_learn::outer::{LoopObserver, LoopOutcome, LoopSetup};
+use vicpilco_learn::outer::LoopSetup;
+use vicpilco_learn::record::{LoopObserver, LoopOutcome};
 use vicpilco_pilco::policy::Policy;
 
 #[derive(Debug, thiserror::Error)]

@@ -19,7 +19,7 @@ use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use vicpilco_learn::data::Rollout;
-use vicpilco_learn::outer::{EpisodeRecord, LoopObserver, LoopState, Phase};
+use vicpilco_learn::record::{EpisodeRecord, LoopObserver, LoopState, Phase};
 use vicpilco_learn::value::ValueOut;
 
 /// Version of `checkpoint.json`'s layout; a different one is refused.

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 use std::path::Path;
-use vicpilco_learn::outer::EpisodeRecord;
+use vicpilco_learn::record::EpisodeRecord;
 
 /// One policy update as `summary.json` lists it: the loop's record plus what the task adds.
 #[derive(Clone, Debug, Serialize, Deserialize)]

@@ -119,8 +119,8 @@ struct ClaimsAfterEachUpdate {
     seen: Vec<Vec<(String, Option<bool>)>>,
 }
 
-impl vicpilco_learn::outer::LoopObserver for ClaimsAfterEachUpdate {
-    fn episode_done(&mut self, _record: &vicpilco_learn::outer::EpisodeRecord) {
+impl vicpilco_learn::record::LoopObserver for ClaimsAfterEachUpdate {
+    fn episode_done(&mut self, _record: &vicpilco_learn::record::EpisodeRecord) {
         let v: serde_json::Value =
             serde_json::from_str(&read(&self.dir.join("summary.json"))).unwrap();
         let claims = v["thesis_reference"].as_array().unwrap().iter();

@@ -13,6 +13,7 @@
 pub mod data;
 pub mod joint;
 pub mod outer;
+pub mod record;
 pub mod replay;
 pub mod selection;
 pub mod start;

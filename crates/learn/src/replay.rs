@@ -10,7 +10,8 @@
 //! the other rule's run continue from there instead of from the start.
 
 use crate::data::training_set;
-use crate::outer::{EpisodeRecord, LoopSetup, LoopState};
+use crate::outer::LoopSetup;
+use crate::record::{EpisodeRecord, LoopState};
 use crate::selection::{verdict_of, ModelSelection, RuleVerdict, SelectionRecord};
 use crate::LearnError;
 use faer::Mat;

@@ -1,6 +1,6 @@
 use super::*;
 use crate::summary::EpisodeSummary;
-use vicpilco_learn::outer::EpisodeRecord;
+use vicpilco_learn::record::EpisodeRecord;
 
 fn summary(returns: &[(f64, bool)]) -> Summary {
     let episodes = returns

@@ -1,0 +1,107 @@
+//! What the outer loop reports and keeps: the progress hooks of a [`LoopObserver`], the record
+//! of each policy update, the finished run ([`LoopOutcome`]) and the state between updates
+//! that a stopped run resumes from ([`LoopState`]).
+
+use crate::data::Rollout;
+use crate::selection::SelectionRecord;
+use crate::value::ValueOut;
+use vicpilco_gp::Hyper;
+
+/// What the loop does between roll-outs, reported to an observer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    InitialRollout,
+    Train,
+    Optimise,
+    Rollout,
+}
+
+/// Progress hooks; every method has a no-op default.
+pub trait LoopObserver {
+    fn phase(&mut self, _episode: usize, _phase: Phase) {}
+    fn objective(&mut self, _episode: usize, _j: f64) {}
+    fn episode_done(&mut self, _record: &EpisodeRecord) {}
+    /// Every roll-out as soon as it is recorded (initial ones with `episode` 0), with its
+    /// weighted immediate cost per step ([`crate::outer::LoopSetup::recorded_costs`]).
+    fn rollout_done(&mut self, _episode: usize, _rollout: &Rollout, _costs: &[f64]) {}
+    /// The long-term prediction of the policy an update optimised.
+    fn predicted(&mut self, _episode: usize, _prediction: &ValueOut) {}
+    /// Everything needed to continue after an update, handed over once it is complete (the
+    /// initial roll-outs count as update 0).
+    fn checkpoint(&mut self, _state: &LoopState) {}
+}
+
+impl LoopObserver for () {}
+
+/// What was recorded for one policy update.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct EpisodeRecord {
+    /// 1-based policy update.
+    pub index: usize,
+    /// `Σ_t γ^t (w1 E[c] + w3 E[c_a])` predicted for the optimised policy (no exploration
+    /// term).
+    pub predicted_return_mean: f64,
+    /// `Σ_t γ^t w1 std[c_t]`: the spread of the return if step costs are perfectly
+    /// correlated (ours: moment matching gives no cross-step covariances).
+    pub predicted_return_std: f64,
+    /// The same weighted cost evaluated on the recorded (true) states and actions.
+    pub recorded_return: f64,
+    /// The success test on the first roll-out.
+    pub success: bool,
+    /// Roll-outs after this update and the fraction of them that succeeded.
+    pub rollouts: usize,
+    pub success_fraction: f64,
+    /// System time of the roll-out, seconds.
+    pub interaction_s: f64,
+    pub train_s: f64,
+    pub optimise_s: f64,
+    /// Value+gradient evaluations of the policy optimisation.
+    pub evaluations: usize,
+    pub line_searches: u64,
+    pub termination: String,
+    /// The objective J (with the exploration term) before and after optimisation.
+    pub objective_start: f64,
+    pub objective_end: f64,
+    /// Training points of the dynamics model, and whether it was sparse.
+    pub n_train: usize,
+    pub sparse: bool,
+    /// Outputs whose hyper-parameters came from the cold restart rather than the warm start
+    /// (0 when the restart is off).
+    #[serde(default)]
+    pub cold_restarts: usize,
+    /// With a comparing [`crate::selection::ModelSelection`]: the rule's score of the refitted
+    /// model and of the previous hyper-parameters (lower is better), and whether the previous
+    /// ones were kept.
+    /// `None` when no selection was made (PILCO's rule, or the first update).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model_selection: Option<SelectionRecord>,
+}
+
+/// Everything the loop produced.
+pub struct LoopOutcome<P> {
+    pub initial: Vec<Rollout>,
+    pub episodes: Vec<EpisodeRecord>,
+    pub rollouts: Vec<Rollout>,
+    pub policy: P,
+    pub dynamics_hyp: Vec<Hyper>,
+    /// Per policy update, the long-term prediction of the optimised policy under that
+    /// update's dynamics model (for predicted-vs-recorded plots).
+    pub predictions: Vec<ValueOut>,
+}
+
+/// The loop between updates: enough to continue a stopped run bit for bit (every random
+/// stream is derived from the master seed and the episode, so no generator state is kept).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct LoopState {
+    /// Updates completed (0: only the initial roll-outs).
+    pub completed: usize,
+    /// The GP's training roll-outs, in order.
+    pub data: Vec<Rollout>,
+    /// Dynamics hyper-parameters of the last fit (the next fit's warm start).
+    pub hyp: Option<Vec<Hyper>>,
+    /// Inducing inputs of the last sparse fit, rows (the next sparse fit's warm start).
+    pub inducing: Option<Vec<Vec<f64>>>,
+    /// The current policy's parameters.
+    pub policy_params: Vec<f64>,
+    pub episodes: Vec<EpisodeRecord>,
+}
