@@ -9,14 +9,14 @@
 //! * the matrix that replaces `(K + σ_n² I)⁻¹` in the variance terms: `K_mm⁻¹ − B⁻¹` (M×M).
 //!
 //! [`SparseGpModel`] exposes these with the accessor names and shapes of
-//! [`GpModel`](crate::GpModel) — [`inputs`](SparseGpModel::inputs) (the inducing inputs, M×D),
+//! [`GpModel`] — [`inputs`](SparseGpModel::inputs) (the inducing inputs, M×D),
 //! [`beta`](SparseGpModel::beta) (M×E), [`inv_k`](SparseGpModel::inv_k) (E matrices M×M) and
 //! [`hyp`](SparseGpModel::hyp) — so moment matching consumes either model the same way.
 //! Everything is computed in the well-conditioned form of [`fitc`] (no explicit `B`).
 //!
 //! Training of the inducing inputs by the FITC marginal likelihood: [`train_inducing`] and the
-//! whole PILCO pipeline [`train_sparse`] (see [`train`](self::train) for how it differs from
-//! pilco-matlab's `train.m`).
+//! whole PILCO pipeline [`train_sparse`] (see this module's `train` for how it differs
+//! from pilco-matlab's `train.m`).
 
 pub mod fitc;
 mod train;

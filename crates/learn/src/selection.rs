@@ -327,7 +327,7 @@ where
     }
 }
 
-/// `rule`'s verdict among `every_rule` (as [`LoopSetup::judge_every_rule`] returns them), if
+/// `rule`'s verdict among `every_rule` (as the loop's `judge_every_rule` returns them), if
 /// it is there. [`ModelSelection::Likelihood`] always refits; its record carries the return
 /// scores of [`ModelSelection::LastRollout`] for reference.
 pub fn verdict_of(rule: ModelSelection, every_rule: &[RuleVerdict]) -> Option<SelectionRecord> {

@@ -229,7 +229,7 @@ impl Environment for ArmEnv {
             .collect()
     }
 
-    /// Places the TCP at (start[0], start[1]) with φ = 0 by inverse kinematics (elbow q2 > 0),
+    /// Places the TCP at (`start[0]`, `start[1]`) with φ = 0 by inverse kinematics (elbow q2 > 0),
     /// at rest. The other start entries (velocities, forces) must be finite and are ignored:
     /// the arm always starts at rest and contact forces follow from the pose. With
     /// `lead_state`, the reference starts `(start[6], start[7])` ahead of the start pose.

@@ -213,8 +213,8 @@ impl Default for ImpedanceParams {
     }
 }
 
-/// Sensor noise standard deviations, SI units (§5-2: the thesis's "variance 0.1 [deg]",
-/// "0.1 [N]" carry unsquared units, so they are read as standard deviations).
+/// Sensor noise standard deviations, SI units (§5-2: the thesis's "variance 0.1 \[deg\]",
+/// "0.1 \[N\]" carry unsquared units, so they are read as standard deviations).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SensorParams {
     /// Encoder noise per joint (rad). Thesis: 0.1°.
@@ -389,9 +389,9 @@ pub struct ArmConfig {
     pub singular_det: f64,
     /// Any joint speed above this (rad/s) is reported as divergence. **Ours**: 100.
     pub max_joint_speed: f64,
-    /// What [`super::ArmEnv::step`] does when the simulation diverges. **Ours**: end the
-    /// episode, as a real arm stops at its limits, so a learned policy that drives the arm
-    /// into a runaway still leaves its roll-out's data behind.
+    /// What the arm's [`Environment::step`](crate::Environment::step) does when the simulation
+    /// diverges. **Ours**: end the episode, as a real arm stops at its limits, so a learned
+    /// policy that drives the arm into a runaway still leaves its roll-out's data behind.
     #[serde(default)]
     pub on_divergence: OnDivergence,
     /// Insertion counts when the TCP ends within this distance of the end wall while in the

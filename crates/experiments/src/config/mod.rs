@@ -216,9 +216,9 @@ pub struct GpConfig {
     /// better fit per output (ours; PILCO only warm-starts from the previous fit, which kept
     /// the arm's velocity model at a length-scale of the sensor noise, EXPERIMENTS.md).
     pub cold_restart: bool,
-    /// Per GP input (x, y, ẋ, ẏ, [ℓ_x, ℓ_y,] [f_x, f_y,] [t,] actions), a length-scale floor: training adds a wall
-    /// penalty below about half of it (`vicpilco_gp::train::floor_penalty`; 0 = free). Ours,
-    /// not PILCO's: a length-scale at an input's sensor-noise scale fits the noise
+    /// Per GP input (x, y, ẋ, ẏ, \[ℓ_x, ℓ_y,\] \[f_x, f_y,\] \[t,\] actions), a length-scale
+    /// floor: training adds a wall penalty below about half of it
+    /// (`vicpilco_gp::train::floor_penalty`; 0 = free). Ours, not PILCO's: a length-scale at an input's sensor-noise scale fits the noise
     /// (EXPERIMENTS.md, "Why an update drops an inserting policy": measured, it did not help).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lengthscale_floor: Option<Vec<f64>>,

@@ -94,7 +94,7 @@ pub(crate) fn column_std(m: MatRef<'_, f64>, c: usize) -> f64 {
     (ss / (n - 1) as f64).sqrt()
 }
 
-/// [`column_std`] of every input column: the `c_d` of [`HypCurb`]. A column with zero spread (or
+/// `column_std` of every input column: the `c_d` of [`HypCurb`]. A column with zero spread (or
 /// a single row) gets 1, so the penalty stays finite.
 pub fn input_std(inputs: MatRef<'_, f64>) -> Vec<f64> {
     (0..inputs.ncols())
