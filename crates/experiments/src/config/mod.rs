@@ -218,8 +218,9 @@ pub struct GpConfig {
     pub cold_restart: bool,
     /// Per GP input (x, y, ẋ, ẏ, \[ℓ_x, ℓ_y,\] \[f_x, f_y,\] \[t,\] actions), a length-scale
     /// floor: training adds a wall penalty below about half of it
-    /// (`vicpilco_gp::train::floor_penalty`; 0 = free). Ours, not PILCO's: a length-scale at an input's sensor-noise scale fits the noise
-    /// (EXPERIMENTS.md, "Why an update drops an inserting policy": measured, it did not help).
+    /// (`vicpilco_gp::train::floor_penalty`; 0 = free). Ours, not PILCO's: a length-scale at
+    /// an input's sensor-noise scale fits the noise (EXPERIMENTS.md, "Why an update drops an
+    /// inserting policy": measured, it did not help).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lengthscale_floor: Option<Vec<f64>>,
     /// Per GP input, in `lengthscale_floor`'s order, a length-scale ceiling: training adds a
