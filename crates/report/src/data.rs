@@ -5,9 +5,14 @@
 use crate::json::Node;
 use crate::ReportError;
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
+mod run_files;
 mod summary_json;
+use run_files::{
+    parse_final_eval, parse_lines, parse_prediction, parse_rollout_line, read_json, read_lines,
+    read_old_rollouts,
+};
 use summary_json::parse_summary;
 
 /// Outcome of the roll-outs of one policy update, as in the thesis's return plots.
@@ -229,6 +234,9 @@ pub(crate) fn num(v: Option<f64>, decimals: usize) -> String {
     v.map_or_else(|| "–".into(), |v| format!("{v:.decimals$}"))
 }
 
+/// Rows of numbers, one per step: actions or states.
+type Rows = Vec<Vec<f64>>;
+
 pub(crate) struct Rollout {
     pub episode: u64,
     pub costs: Option<Vec<f64>>,
@@ -369,245 +377,4 @@ impl Run {
             .map(|p| p.dt)
             .or(self.summary.config_dt)
     }
-}
-
-fn read_text(file: &Path) -> Result<Option<String>, ReportError> {
-    match std::fs::read_to_string(file) {
-        Ok(s) => Ok(Some(s)),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-        Err(error) => Err(ReportError::Read {
-            file: file.to_path_buf(),
-            error,
-        }),
-    }
-}
-
-fn read_json(file: &Path) -> Result<Value, ReportError> {
-    let text = read_text(file)?.ok_or_else(|| ReportError::Read {
-        file: file.to_path_buf(),
-        error: std::io::Error::new(
-            std::io::ErrorKind::NotFound,
-            "no such file (is this a run directory?)",
-        ),
-    })?;
-    serde_json::from_str(&text).map_err(|error| ReportError::Json {
-        file: file.to_path_buf(),
-        location: "whole file".into(),
-        error,
-    })
-}
-
-/// The parsed lines of a .jsonl file, each with its 1-based line number; `None` if the file
-/// does not exist.
-struct Lines {
-    file: PathBuf,
-    values: Vec<(usize, Value)>,
-}
-
-fn read_lines(file: &Path, notes: &mut Vec<String>) -> Result<Option<Lines>, ReportError> {
-    let Some(text) = read_text(file)? else {
-        return Ok(None);
-    };
-    let name = file.file_name().map(|n| n.to_string_lossy().into_owned());
-    let name = name.unwrap_or_default();
-    let numbered: Vec<(usize, &str)> = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty())
-        .map(|(i, l)| (i + 1, l))
-        .collect();
-    let mut values = Vec::with_capacity(numbered.len());
-    for (k, &(line, s)) in numbered.iter().enumerate() {
-        match serde_json::from_str(s) {
-            Ok(v) => values.push((line, v)),
-            // The writer appends while a run is going: a cut-off final line is expected then.
-            Err(_) if k + 1 == numbered.len() && !text.ends_with('\n') => {
-                notes.push(format!(
-                    "{name}: ignored the incomplete last line {line} (run still writing?)"
-                ));
-            }
-            Err(error) => {
-                return Err(ReportError::Json {
-                    file: file.to_path_buf(),
-                    location: format!("line {line}"),
-                    error,
-                })
-            }
-        }
-    }
-    Ok(Some(Lines {
-        file: file.to_path_buf(),
-        values,
-    }))
-}
-
-fn parse_lines<T>(
-    lines: &Lines,
-    parse: impl Fn(Node<'_>) -> Result<T, ReportError>,
-) -> Result<Vec<T>, ReportError> {
-    lines
-        .values
-        .iter()
-        .map(|(line, v)| {
-            let prefix = format!("line {line}: ");
-            parse(Node::root(&lines.file, &prefix, v))
-        })
-        .collect()
-}
-
-/// Rows of numbers, one per step: actions or states.
-type Rows = Vec<Vec<f64>>;
-
-/// The applied actions and the true states of one roll-out.
-fn parse_trajectory(r: Node<'_>) -> Result<(Rows, Rows), ReportError> {
-    Ok((
-        r.req("actions", |a| a.f64_rows())?,
-        r.req("true_states", |s| s.f64_rows())?,
-    ))
-}
-
-fn parse_rollout_line(n: Node<'_>) -> Result<Rollout, ReportError> {
-    let (actions, true_states, stopped_early) = n.req("rollout", |r| {
-        let (actions, true_states) = parse_trajectory(r)?;
-        let stopped_early = r.with("infos", |infos| match infos {
-            None => Ok(None),
-            Some(infos) => Ok(infos
-                .map_array(|i| i.opt_string("stopped_early"))?
-                .pop()
-                .flatten()),
-        })?;
-        Ok((actions, true_states, stopped_early))
-    })?;
-    Ok(Rollout {
-        episode: n.req_u64("episode")?,
-        costs: n.with("costs", |c| c.map(|c| c.f64_vec()).transpose())?,
-        actions,
-        true_states,
-        stopped_early,
-    })
-}
-
-/// Runs before rollouts.jsonl wrote one `{"initial": [...], "learned": [...]}` document with
-/// one learned roll-out per update.
-fn read_old_rollouts(
-    file: &Path,
-    notes: &mut Vec<String>,
-) -> Result<Option<Vec<Rollout>>, ReportError> {
-    if !file.exists() {
-        return Ok(None);
-    }
-    let v = read_json(file)?;
-    let n = Node::root(file, "", &v);
-    let list = |key: &str, episode: &dyn Fn(usize) -> u64| {
-        n.with(key, |l| match l {
-            None => Ok(Vec::new()),
-            Some(l) => {
-                let mut i = 0;
-                l.map_array(|r| {
-                    let (actions, true_states) = parse_trajectory(r)?;
-                    i += 1;
-                    Ok(Rollout {
-                        episode: episode(i - 1),
-                        costs: None,
-                        actions,
-                        true_states,
-                        stopped_early: None,
-                    })
-                })
-            }
-        })
-    };
-    let mut all = list("initial", &|_| 0)?;
-    all.extend(list("learned", &|i| i as u64 + 1)?);
-    notes.push("read the older rollouts.json (no recorded costs)".into());
-    Ok(Some(all))
-}
-
-fn parse_prediction(n: Node<'_>) -> Result<Prediction, ReportError> {
-    // Every step of every start must have the first step's dimensions, or the plots would
-    // silently mix up state components.
-    let mut dims: Option<(usize, usize)> = None;
-    let starts = n.req("starts", |s| {
-        s.map_array(|start| {
-            start.map_array(|node| {
-                let step = parse_step(node)?;
-                let d = (step.mean.len(), step.action_mean.len());
-                let d_var = (step.var.len(), step.action_var.len());
-                let want = *dims.get_or_insert(d);
-                if d != want || d_var != want {
-                    return Err(node.malformed(format!(
-                        "mean/var of {} and action_mean/action_var of {} numbers, as in the first step",
-                        want.0, want.1
-                    )));
-                }
-                Ok(step)
-            })
-        })
-    })?;
-    let steps = starts.into_iter().next().unwrap_or_default();
-    if steps.is_empty() {
-        return n.req("starts", |s| {
-            Err(s.malformed("a first start distribution with at least one step"))
-        });
-    }
-    let (ds, da) = dims.unwrap_or_default();
-    let names = |key: &str, d: usize, fallback: &str| -> Result<Vec<String>, ReportError> {
-        n.with(key, |v| match v {
-            None => Ok((1..=d).map(|i| format!("{fallback} {i}")).collect()),
-            Some(v) => {
-                let names = v.string_vec()?;
-                if names.len() != d {
-                    return Err(v.malformed(format!("{d} names (one per dimension)")));
-                }
-                Ok(names)
-            }
-        })
-    };
-    let dt = match n.opt_f64("dt")? {
-        Some(dt) => dt,
-        None => match steps.as_slice() {
-            [a, b, ..] => b.t - a.t,
-            [a] => a.t,
-            [] => 1.0,
-        },
-    };
-    Ok(Prediction {
-        episode: n.req_u64("episode")?,
-        dt,
-        state_names: names("state_names", ds, "state")?,
-        action_names: names("action_names", da, "action")?,
-        action_bounds: n.with("action_bounds", |v| {
-            v.map(|v| {
-                let rows = v.f64_rows()?;
-                if rows.len() != da || rows.iter().any(|r| r.len() != 2 || r[0] > r[1]) {
-                    return Err(
-                        v.malformed(format!("{da} [lowest, highest] pairs (one per action)"))
-                    );
-                }
-                Ok(rows.iter().map(|r| (r[0], r[1])).collect())
-            })
-            .transpose()
-        })?,
-        steps,
-    })
-}
-
-fn parse_step(n: Node<'_>) -> Result<PredStep, ReportError> {
-    let wm = n.opt_f64("weighted_cost_mean")?;
-    let ws = n.opt_f64("weighted_cost_std")?;
-    Ok(PredStep {
-        t: n.req_f64("t")?,
-        mean: n.req("mean", |v| v.f64_vec())?,
-        var: n.req("var", |v| v.f64_vec())?,
-        action_mean: n.req("action_mean", |v| v.f64_vec())?,
-        action_var: n.req("action_var", |v| v.f64_vec())?,
-        weighted_cost: wm.zip(ws),
-    })
-}
-
-fn parse_final_eval(n: Node<'_>) -> Result<FinalEval, ReportError> {
-    Ok(FinalEval {
-        success: n.req("success", |s| s.bool())?,
-        true_states: n.req("rollout", |r| r.req("true_states", |s| s.f64_rows()))?,
-    })
 }
