@@ -414,6 +414,11 @@ fn every_arm_run_selects_its_model_on_the_last_roll_out_and_says_it_is_ours() {
         ModelSelection::LastRolloutStatesHuber
     );
     assert!(huber.ours_keys().contains(&"gp.model_selection"));
+    let crps = set("\"last-rollout-crps\"").unwrap();
+    assert_eq!(crps.gp.model_selection, ModelSelection::LastRolloutCrps);
+    assert!(crps.ours_keys().contains(&"gp.model_selection"));
+    let (setup, _) = arm::setup(&crps, arm::rbf_policy(&crps, 1).unwrap(), 1).unwrap();
+    assert_eq!(setup.model_selection, ModelSelection::LastRolloutCrps);
     let err = set("\"best-guess\"").unwrap_err().to_string();
     assert!(
         err.contains("model_selection") && err.contains("test.toml"),

@@ -243,8 +243,9 @@ pub struct GpConfig {
     /// hyper-parameters, whichever predicts the newest roll-out's return better) or
     /// `"last-rollout-states"` (ours: the same choice on the roll-out's predicted states),
     /// `"last-rollout-states-robust"` (ours: on the states with a Student-t density per
-    /// entry) or `"last-rollout-states-huber"` (ours, vil-sic's: on the states with a Huber
-    /// density per entry; `vicpilco_learn::selection::ModelSelection`).
+    /// entry), `"last-rollout-states-huber"` (ours, vil-sic's: on the states with a Huber
+    /// density per entry) or `"last-rollout-crps"` (ours: on the return by its continuous
+    /// ranked probability score; `vicpilco_learn::selection::ModelSelection`).
     #[serde(default, skip_serializing_if = "is_likelihood")]
     pub model_selection: ModelSelection,
 }
