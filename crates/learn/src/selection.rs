@@ -60,7 +60,10 @@ pub enum ModelSelection {
     /// (EXPERIMENTS.md, "The selection's lock-in"); the CRPS charges width linearly at a
     /// right mean and a miss linearly beyond the spread, so it prefers the sharper of two
     /// models that both cover the outcome while one far-off return decides less than
-    /// under the log score.
+    /// under the log score. No shipped config uses it: on the five stored vilta runs it
+    /// chooses as [`Self::LastRollout`] at every update rescored, since where the two models
+    /// differ one mispredicts the return far beyond its spread and both scores say so
+    /// (EXPERIMENTS.md, thirty-first session).
     LastRolloutCrps,
 }
 
@@ -105,7 +108,7 @@ pub fn rollout_score(mean: f64, std: f64, recorded: f64) -> f64 {
 /// How well a long-term prediction explains a recorded return, by the continuous ranked
 /// probability score of N(`mean`, `std`²) at `recorded`: ∫ (F(y) − 1{y ≥ recorded})² dy with
 /// F the predicted distribution function, in closed form σ·(z·erf(z/√2) + 2φ(z) − 1/√π),
-/// z = (recorded − mean)/σ (Gneiting and Raftery 2007, eq. 21). In the return's units; a
+/// z = (recorded − mean)/σ (Gneiting and Raftery, JASA 2007). In the return's units; a
 /// deterministic prediction (σ = 0) scores its absolute error, so no floor is needed.
 pub fn crps_return_score(mean: f64, std: f64, recorded: f64) -> f64 {
     let error = recorded - mean;
