@@ -62,7 +62,8 @@
 //! of the release).
 
 use super::ode;
-use super::{non_negative, positive, ClassicEnv, ClassicSystem, Dynamics, Scenario, SuccessTest};
+use super::scenario::{non_negative, positive};
+use super::{ClassicEnv, ClassicSystem, Dynamics, Scenario, SuccessTest};
 use crate::EnvError;
 use std::f64::consts::PI;
 
