@@ -102,3 +102,30 @@ impl EnvError {
         }
     }
 }
+
+/// `v` as a config value for `field`: finite.
+pub(crate) fn finite(field: &str, v: f64) -> Result<(), EnvError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(EnvError::config(field, v, "finite"))
+    }
+}
+
+/// `v` as a config value for `field`: finite and > 0.
+pub(crate) fn positive(field: &str, v: f64) -> Result<(), EnvError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(EnvError::config(field, v, "> 0"))
+    }
+}
+
+/// `v` as a config value for `field`: finite and ≥ 0.
+pub(crate) fn non_negative(field: &str, v: f64) -> Result<(), EnvError> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(EnvError::config(field, v, "≥ 0"))
+    }
+}

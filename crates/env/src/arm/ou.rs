@@ -50,7 +50,7 @@ impl OuParams {
 
     /// Checks the parameters.
     pub fn validate(&self) -> Result<(), EnvError> {
-        super::params::positive("ou.a_min", self.a_min)?;
+        crate::error::positive("ou.a_min", self.a_min)?;
         if !(self.a_max.is_finite() && self.a_max > self.a_min) {
             return Err(EnvError::config(
                 "ou.a_max",
@@ -58,8 +58,8 @@ impl OuParams {
                 format!("> a_min = {}", self.a_min),
             ));
         }
-        super::params::positive("ou.theta", self.theta)?;
-        super::params::positive("ou.dt", self.dt)
+        crate::error::positive("ou.theta", self.theta)?;
+        crate::error::positive("ou.dt", self.dt)
     }
 
     /// One profile of `n` values starting at μ, drawn from `rng`; `clip` limits to

@@ -4,6 +4,7 @@
 //! (issue 5 fixes them) and are listed in `crates/env/README.md`.
 
 use super::plan::ReferenceSpec;
+use crate::error::{finite, non_negative, positive};
 use crate::EnvError;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -506,29 +507,5 @@ impl ArmConfig {
         positive("max_joint_speed", self.max_joint_speed)?;
         non_negative("insert_tolerance", self.insert_tolerance)?;
         Ok(())
-    }
-}
-
-pub(crate) fn finite(field: &str, v: f64) -> Result<(), EnvError> {
-    if v.is_finite() {
-        Ok(())
-    } else {
-        Err(EnvError::config(field, v, "finite"))
-    }
-}
-
-pub(crate) fn positive(field: &str, v: f64) -> Result<(), EnvError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(EnvError::config(field, v, "> 0"))
-    }
-}
-
-pub(crate) fn non_negative(field: &str, v: f64) -> Result<(), EnvError> {
-    if v.is_finite() && v >= 0.0 {
-        Ok(())
-    } else {
-        Err(EnvError::config(field, v, "≥ 0"))
     }
 }

@@ -83,11 +83,11 @@ impl ViaPlan {
         }
         for (i, p) in self.points.iter().enumerate() {
             for (k, v) in p.iter().enumerate() {
-                super::params::finite(&format!("reference.points[{i}][{k}]"), *v)?;
+                crate::error::finite(&format!("reference.points[{i}][{k}]"), *v)?;
             }
         }
         for i in 0..self.times.len() {
-            super::params::finite(&format!("reference.times[{i}]"), self.times[i])?;
+            crate::error::finite(&format!("reference.times[{i}]"), self.times[i])?;
             if i > 0 && self.times[i] <= self.times[i - 1] {
                 return Err(EnvError::config(
                     format!("reference.times[{i}]"),
@@ -172,16 +172,16 @@ impl ReferenceSpec {
             ReferenceSpec::MinJerk(p) => p.validate(),
             ReferenceSpec::Fixed(x) => {
                 for (k, v) in x.iter().enumerate() {
-                    super::params::finite(&format!("reference.fixed[{k}]"), *v)?;
+                    crate::error::finite(&format!("reference.fixed[{k}]"), *v)?;
                 }
                 Ok(())
             }
             ReferenceSpec::Ramp { from, to, t0, t1 } => {
                 for k in 0..3 {
-                    super::params::finite(&format!("reference.from[{k}]"), from[k])?;
-                    super::params::finite(&format!("reference.to[{k}]"), to[k])?;
+                    crate::error::finite(&format!("reference.from[{k}]"), from[k])?;
+                    crate::error::finite(&format!("reference.to[{k}]"), to[k])?;
                 }
-                super::params::finite("reference.t0", *t0)?;
+                crate::error::finite("reference.t0", *t0)?;
                 if !(t1.is_finite() && t1 > t0) {
                     return Err(EnvError::config("reference.t1", t1, format!("> t0 = {t0}")));
                 }

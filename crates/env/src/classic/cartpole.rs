@@ -61,8 +61,8 @@
 //! `(x + l sin θ, −l cos θ)` from `(0, l)`. The tip threshold 0.1 m is 0.4 cost widths.
 
 use super::ode;
-use super::scenario::{non_negative, positive};
 use super::{ClassicEnv, ClassicSystem, Dynamics, Scenario, SuccessTest};
+use crate::error::{non_negative, positive};
 use crate::EnvError;
 use std::f64::consts::PI;
 

@@ -62,8 +62,8 @@
 //! of the release).
 
 use super::ode;
-use super::scenario::{non_negative, positive};
 use super::{ClassicEnv, ClassicSystem, Dynamics, Scenario, SuccessTest};
+use crate::error::{non_negative, positive};
 use crate::EnvError;
 use std::f64::consts::PI;
 

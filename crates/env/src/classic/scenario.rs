@@ -2,6 +2,7 @@
 //! the field.
 
 use super::ClassicSystem;
+use crate::error::{non_negative, positive};
 use crate::EnvError;
 use rand::{Rng, RngExt};
 use rand_distr::{Distribution, StandardNormal};
@@ -289,22 +290,6 @@ impl<P: ClassicSystem> Scenario<P> {
             return Err(EnvError::config("scenario.success.window", 0, "≥ 1"));
         }
         Ok(())
-    }
-}
-
-pub(super) fn positive(field: &str, v: f64) -> Result<(), EnvError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(EnvError::config(field, v, "finite and > 0"))
-    }
-}
-
-pub(super) fn non_negative(field: &str, v: f64) -> Result<(), EnvError> {
-    if v.is_finite() && v >= 0.0 {
-        Ok(())
-    } else {
-        Err(EnvError::config(field, v, "finite and ≥ 0"))
     }
 }
 
