@@ -39,13 +39,21 @@ fn a_rule_displays_as_its_config_name() {
     }
 }
 
+/// Two predicted steps of two entries, and the recorded start (9, 9, not predicted) and the
+/// two states after it.
+fn two_steps() -> (Vec<PredictedStep>, Vec<Vec<f64>>) {
+    (
+        vec![
+            step(&[0.4, 1.0], &[0.1, 0.2]),
+            step(&[0.7, 1.0], &[0.3, 0.1]),
+        ],
+        vec![vec![9.0, 9.0], vec![0.5, 1.0], vec![0.7, 1.2]],
+    )
+}
+
 #[test]
 fn trajectory_score_is_the_summed_gaussian_negative_log_density_of_the_later_states() {
-    let recorded = vec![vec![9.0, 9.0], vec![0.5, 1.0], vec![0.7, 1.2]];
-    let predicted = vec![
-        step(&[0.4, 1.0], &[0.1, 0.2]),
-        step(&[0.7, 1.0], &[0.3, 0.1]),
-    ];
+    let (predicted, recorded) = two_steps();
     let term = |m: f64, s: f64, x: f64| s.ln() + 0.5 * ((m - x) / s).powi(2);
     let expected =
         term(0.4, 0.1, 0.5) + term(1.0, 0.2, 1.0) + term(0.7, 0.3, 0.7) + term(1.0, 0.1, 1.2);
@@ -85,11 +93,7 @@ fn trajectory_score_ranks_sharp_and_right_over_vague_over_sharp_and_wrong() {
 
 #[test]
 fn robust_trajectory_score_is_the_summed_student_t_negative_log_density() {
-    let recorded = vec![vec![9.0, 9.0], vec![0.5, 1.0], vec![0.7, 1.2]];
-    let predicted = vec![
-        step(&[0.4, 1.0], &[0.1, 0.2]),
-        step(&[0.7, 1.0], &[0.3, 0.1]),
-    ];
+    let (predicted, recorded) = two_steps();
     // The Student-t density with location m, scale s and ν degrees of freedom, written out.
     let nu = ROBUST_SCORE_DEGREES_OF_FREEDOM;
     let density = |m: f64, s: f64, x: f64| {

@@ -24,6 +24,16 @@ fn md_rows<'a>(page: &'a str, heading: &str) -> Vec<Vec<&'a str>> {
         .collect()
 }
 
+/// The value of the Totals row whose label starts with `label` (the table has two columns).
+fn totals_value(page: &str, label: &str) -> String {
+    md_rows(page, "## Totals")
+        .into_iter()
+        .find(|r| r[0].starts_with(label))
+        .inspect(|r| assert_eq!(r.len(), 2, "{r:?}"))
+        .map(|r| r[1].to_string())
+        .unwrap_or_else(|| panic!("no Totals row {label:?}"))
+}
+
 #[test]
 fn markdown_report_has_a_row_per_update_and_every_claim() {
     let tmp = TempDir::new("md-vil");
@@ -146,14 +156,7 @@ fn action_statistics_of_a_constant_gain_and_of_missing_components() {
 fn totals_list_the_rollouts_the_system_ended_early() {
     let tmp = TempDir::new("ended-early");
     write_run(tmp.path(), Kind::Vil);
-    let row = |page: &str| {
-        md_rows(page, "## Totals")
-            .into_iter()
-            .find(|r| r[0] == "roll-outs the system ended early")
-            .inspect(|r| assert_eq!(r.len(), 2, "{r:?}"))
-            .map(|r| r[1].to_string())
-            .expect("an ended-early row")
-    };
+    let row = |page: &str| totals_value(page, "roll-outs the system ended early");
     write_report(tmp.path()).unwrap();
     assert_eq!(row(&markdown(tmp.path())), "none");
 
@@ -179,13 +182,7 @@ fn totals_say_which_build_computed_which_updates() {
     let tmp = TempDir::new("sessions");
     write_run(tmp.path(), Kind::Vil);
     write_report(tmp.path()).unwrap();
-    let code_row = |page: &str| {
-        md_rows(page, "## Totals")
-            .into_iter()
-            .find(|r| r[0].starts_with("code"))
-            .map(|r| r[1].to_string())
-            .expect("a code row")
-    };
+    let code_row = |page: &str| totals_value(page, "code");
     assert_eq!(code_row(&markdown(tmp.path())), "not recorded");
 
     let summary = tmp.path().join("summary.json");
@@ -219,13 +216,7 @@ fn totals_say_which_updates_a_run_took_from_a_recorded_run() {
     let tmp = TempDir::new("replayed");
     write_run(tmp.path(), Kind::Vil);
     write_report(tmp.path()).unwrap();
-    let replay_row = |page: &str| {
-        md_rows(page, "## Totals")
-            .into_iter()
-            .find(|r| r[0].starts_with("updates from a recorded run"))
-            .map(|r| r[1].to_string())
-            .expect("a replay row")
-    };
+    let replay_row = |page: &str| totals_value(page, "updates from a recorded run");
     assert_eq!(replay_row(&markdown(tmp.path())), "–");
     edit_json(&tmp.path().join("summary.json"), |v| {
         v["replayed_from"] = serde_json::json!({
