@@ -3,6 +3,8 @@
 
 mod acceptance_cmd;
 mod bench_cmd;
+#[cfg(test)]
+mod doc_commands;
 mod evaluate_cmd;
 mod oracle_cmd;
 mod recorded;

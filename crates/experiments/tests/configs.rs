@@ -32,6 +32,34 @@ fn every_toml_in_the_experiments_directory_is_shipped_and_parses() {
     assert_eq!(shipped("vil-gic"), shipped("vil-gic-rbf10"));
 }
 
+/// Each probe (`probes/<probe>/<experiment>.toml`, see probes/README.md) is a shipped config
+/// with settings changed: it must still load under the current keys and rules, and be named
+/// after the experiment it changes, so `vicpilco run <experiment> --config` can take it.
+#[test]
+fn every_probe_config_loads_and_is_named_after_a_shipped_experiment() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../probes");
+    let mut probes = 0;
+    for probe in std::fs::read_dir(&dir).unwrap() {
+        let probe = probe.unwrap().path();
+        if !probe.is_dir() {
+            continue;
+        }
+        for file in std::fs::read_dir(&probe).unwrap() {
+            let file = file.unwrap().path();
+            if file.extension().is_none_or(|e| e != "toml") {
+                continue;
+            }
+            let stem = file.file_stem().unwrap().to_string_lossy();
+            let base = shipped(&stem);
+            let changed = config::load(&file).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(changed.task, base.task, "{}", file.display());
+            assert_ne!(changed, base, "{} changes nothing", file.display());
+            probes += 1;
+        }
+    }
+    assert!(probes > 0, "no probe config under {}", dir.display());
+}
+
 /// The VIL table (issue 6, item 2).
 fn assert_vil_common(c: &ArmExperiment) {
     assert_eq!(c.task, Task::Vil);
