@@ -228,6 +228,26 @@ fn every_documented_command_parses_and_names_what_exists() {
     }
 }
 
+/// The README's test command is the one CI runs, word for word.
+#[test]
+fn the_readme_test_command_is_the_one_ci_runs() {
+    let readme = std::fs::read_to_string(repo_root().join("README.md")).unwrap();
+    let (_, after) = readme
+        .split_once("Run the tests")
+        .expect("README.md has a \"Run the tests\" paragraph");
+    let command = fenced_lines(after)
+        .into_iter()
+        .map(|(_, line)| line)
+        .next()
+        .expect("a command block after \"Run the tests\"");
+    assert!(command.starts_with("cargo test"), "{command}");
+    let ci = std::fs::read_to_string(repo_root().join(".ci/run")).unwrap();
+    assert!(
+        ci.lines().any(|l| l.trim() == command),
+        ".ci/run does not run the README's test command `{command}`"
+    );
+}
+
 #[test]
 fn every_documented_example_exists() {
     let (_, examples) = doc_commands();

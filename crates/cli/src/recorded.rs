@@ -29,7 +29,8 @@ impl RecordedRun {
         }
     }
 
-    /// Where a command's JSON lines go when no --out is given: runs/<name>-seed<S>-<what>.jsonl.
+    /// Where a command's JSON lines go when no `--out` is given:
+    /// `runs/<name>-seed<S>-<what>.jsonl`.
     pub fn default_out(&self, what: &str) -> PathBuf {
         PathBuf::from(format!("runs/{}-seed{}-{what}.jsonl", self.name, self.seed))
     }
