@@ -17,8 +17,11 @@ use serde::{Deserialize, Serialize};
 /// Log hyper-parameters of one output: ARD length-scales, signal and noise standard deviation.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Hyper {
+    /// `log ℓ_d`, one per input dimension (D); ℓ_d is in the units of input d.
     pub log_ls: Vec<f64>,
+    /// `log σ_f`; σ_f is the signal standard deviation, in the units of the output.
     pub log_sf: f64,
+    /// `log σ_n`; σ_n is the noise standard deviation, in the units of the output.
     pub log_sn: f64,
 }
 
@@ -41,6 +44,7 @@ impl Hyper {
         v
     }
 
+    /// Input dimension D: the number of length-scales.
     pub fn dim(&self) -> usize {
         self.log_ls.len()
     }
@@ -60,6 +64,8 @@ impl Hyper {
         self.log_ls.iter().map(|l| (-2.0 * l).exp()).collect()
     }
 
+    /// Whether no log hyper-parameter is NaN or ±inf; [`crate::validate_data`] and the
+    /// likelihood reject the set otherwise.
     pub fn is_finite(&self) -> bool {
         self.log_sf.is_finite()
             && self.log_sn.is_finite()
@@ -69,6 +75,7 @@ impl Hyper {
 
 /// A stationary covariance function with ARD length-scales and a signal variance.
 pub trait Kernel: Send + Sync + std::fmt::Debug {
+    /// Short stable identifier of the kernel, e.g. `"squared-exponential-ard"`.
     fn name(&self) -> &'static str;
 
     /// `k(a, b)` (no noise).

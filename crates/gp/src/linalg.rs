@@ -19,8 +19,12 @@ pub struct Chol {
 /// diagonal, growth factor per retry, number of retries.
 #[derive(Clone, Copy, Debug)]
 pub struct JitterPolicy {
+    /// First jitter tried, as a fraction of the mean absolute diagonal (default 1e-10).
     pub first_relative: f64,
+    /// Factor the jitter grows by after each failed try (default 10).
     pub growth: f64,
+    /// Jittered tries after the plain factorisation fails (default 8, i.e. up to 1e-3 of the
+    /// mean diagonal); then [`GpError::NotPositiveDefinite`].
     pub max_tries: usize,
 }
 
@@ -78,6 +82,7 @@ impl Chol {
         })
     }
 
+    /// Order n of the factorised n×n matrix.
     pub fn dim(&self) -> usize {
         self.llt.L().nrows()
     }
@@ -140,6 +145,8 @@ pub struct SpdWorkspace {
 }
 
 impl SpdWorkspace {
+    /// Buffers for n×n matrices (the factor, its inverse and faer's Cholesky scratch),
+    /// allocated once; [`factor`](Self::factor) panics on a matrix of another size.
     pub fn new(n: usize) -> Self {
         let req = faer::linalg::cholesky::llt::factor::cholesky_in_place_scratch::<f64>(
             n,
@@ -154,6 +161,7 @@ impl SpdWorkspace {
         }
     }
 
+    /// The n the workspace was sized for in [`new`](Self::new).
     pub fn dim(&self) -> usize {
         self.l.nrows()
     }

@@ -111,27 +111,37 @@ impl GpModel {
         })
     }
 
+    /// Number of training points N.
     pub fn n(&self) -> usize {
         self.inputs.nrows()
     }
+    /// Input dimension D (columns of the training inputs).
     pub fn input_dim(&self) -> usize {
         self.inputs.ncols()
     }
+    /// Number of outputs E, one independent GP (and one [`Hyper`]) each.
     pub fn output_dim(&self) -> usize {
         self.hyp.len()
     }
+    /// Training inputs X, N×D, one row per training point (the centres of moment matching).
     pub fn inputs(&self) -> MatRef<'_, f64> {
         self.inputs.as_ref()
     }
+    /// Training targets, N×E: column e is `y_e`, the targets of output e.
     pub fn targets(&self) -> MatRef<'_, f64> {
         self.targets.as_ref()
     }
+    /// Log hyper-parameters, one [`Hyper`] per output, in output order.
     pub fn hyp(&self) -> &[Hyper] {
         &self.hyp
     }
+    /// `β_e = (K_e + σ_ne² I)⁻¹ y_e` as column e, N×E (PILCO's `beta`; jitter included): the
+    /// predictive mean is `k_*ᵀ β_e`.
     pub fn beta(&self) -> MatRef<'_, f64> {
         self.beta.as_ref()
     }
+    /// `(K_e + σ_ne² I)⁻¹` per output (E matrices, N×N; PILCO's `iK`, jitter included): the
+    /// model-uncertainty term of moment matching (gp0).
     pub fn inv_k(&self) -> &[Mat<f64>] {
         &self.inv_k
     }

@@ -108,9 +108,11 @@ impl SparseGpModel {
     pub fn n_train(&self) -> usize {
         self.n_train
     }
+    /// Input dimension D (columns of the inducing and of the training inputs).
     pub fn input_dim(&self) -> usize {
         self.inducing.ncols()
     }
+    /// Number of outputs E, each with its own [`Hyper`] on the shared inducing inputs.
     pub fn output_dim(&self) -> usize {
         self.hyp.len()
     }
@@ -118,6 +120,7 @@ impl SparseGpModel {
     pub fn inputs(&self) -> MatRef<'_, f64> {
         self.inducing.as_ref()
     }
+    /// Log hyper-parameters, one [`Hyper`] per output, in output order.
     pub fn hyp(&self) -> &[Hyper] {
         &self.hyp
     }
@@ -202,7 +205,10 @@ fn output_parts(
 /// meaning for moment matching.
 #[derive(Clone, Debug)]
 pub enum DynamicsModel {
+    /// Exact GP on all N training points, what [`fit`](Self::fit) builds for
+    /// N ≤ [`DynamicsOptions::sparse_threshold`] (moment matching as PILCO's gp0).
     Full(GpModel),
+    /// FITC GP on M inducing inputs, built above the threshold (moment matching as gp1).
     Sparse(SparseGpModel),
 }
 
@@ -242,7 +248,9 @@ impl DynamicsOptions {
 /// What [`DynamicsModel::fit`] did.
 #[derive(Clone, Debug)]
 pub enum DynamicsReport {
+    /// Hyper-parameter training of the exact GP on all N points.
     Full(TrainReport),
+    /// Hyper-parameter, then inducing-input training of the sparse GP ([`train_sparse`]).
     Sparse(SparseTrainReport),
 }
 
@@ -284,6 +292,7 @@ impl DynamicsModel {
         Ok((Self::Sparse(model), DynamicsReport::Sparse(rep)))
     }
 
+    /// Whether this is the FITC model, whose [`inputs`](Self::inputs) are inducing inputs.
     pub fn is_sparse(&self) -> bool {
         matches!(self, Self::Sparse(_))
     }
@@ -294,24 +303,31 @@ impl DynamicsModel {
             Self::Sparse(m) => m.inputs(),
         }
     }
+    /// Weights of the predictive mean: N×E ([`GpModel::beta`]) or M×E
+    /// ([`SparseGpModel::beta`]).
     pub fn beta(&self) -> MatRef<'_, f64> {
         match self {
             Self::Full(m) => m.beta(),
             Self::Sparse(m) => m.beta(),
         }
     }
+    /// Per output, the matrix of the variance terms of moment matching: `(K + σ_n² I)⁻¹`
+    /// (N×N, full) or `K_mm⁻¹ − B⁻¹` (M×M, sparse).
     pub fn inv_k(&self) -> &[Mat<f64>] {
         match self {
             Self::Full(m) => m.inv_k(),
             Self::Sparse(m) => m.inv_k(),
         }
     }
+    /// Log hyper-parameters, one [`Hyper`] per output, in output order.
     pub fn hyp(&self) -> &[Hyper] {
         match self {
             Self::Full(m) => m.hyp(),
             Self::Sparse(m) => m.hyp(),
         }
     }
+    /// Predictive mean and latent variance (no noise), E each, at a deterministic input `x`
+    /// (length D): [`GpModel::predict`] or [`SparseGpModel::predict`].
     pub fn predict(&self, x: &[f64]) -> (Vec<f64>, Vec<f64>) {
         match self {
             Self::Full(m) => m.predict(x),

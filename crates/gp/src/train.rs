@@ -107,7 +107,11 @@ pub struct OutputReport {
     pub iterations: u64,
     /// Objective evaluations (value and gradient together), including the final one.
     pub evaluations: usize,
+    /// Why L-BFGS stopped; [`Termination::converged`] separates convergence from a spent
+    /// budget or a failed line search.
     pub termination: Termination,
+    /// Wall time of this output's training from the kept start (with a cold restart, the
+    /// other start's time is not included).
     pub wall_time: Duration,
     /// Jitter the Cholesky factorisation needed at the final hyper-parameters (0 when none).
     pub jitter: f64,

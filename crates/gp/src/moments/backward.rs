@@ -47,9 +47,11 @@ pub struct ParamAdjoint {
 /// Adjoints of the Gaussian input, and optionally of the model parameters.
 #[derive(Clone, Debug)]
 pub struct InputAdjoint {
+    /// D, `m̄ = ∂f/∂m` for the input mean.
     pub m: Vec<f64>,
     /// D×D, symmetrised.
     pub s: Mat<f64>,
+    /// `Some` exactly when [`backward`] was called with `with_params`.
     pub params: Option<ParamAdjoint>,
 }
 

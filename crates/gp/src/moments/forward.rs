@@ -30,7 +30,9 @@ pub struct MmModel<'a> {
     pub centres: MatRef<'a, f64>,
     /// N×E.
     pub beta: MatRef<'a, f64>,
+    /// Log hyper-parameters, one per output (E), each with D length-scales.
     pub hyp: &'a [Hyper],
+    /// Model uncertainty (`W_a`, gp0/gp1) or a fixed diagonal instead (gp2).
     pub variance: Variance<'a>,
 }
 
@@ -76,9 +78,11 @@ impl<'a> MmModel<'a> {
         }
     }
 
+    /// Input dimension D (columns of the centres).
     pub fn input_dim(&self) -> usize {
         self.centres.ncols()
     }
+    /// Number of outputs E (one [`Hyper`] each).
     pub fn output_dim(&self) -> usize {
         self.hyp.len()
     }

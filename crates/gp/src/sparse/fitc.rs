@@ -217,6 +217,7 @@ pub(crate) fn mat_t_vec(a: MatRef<'_, f64>, b: &[f64]) -> Vec<f64> {
 /// FITC negative log marginal likelihood of one output with its gradients.
 #[derive(Clone, Debug)]
 pub struct FitcEval {
+    /// The FITC nlml `½ yᵀC⁻¹y + ½ log|C| + (N/2) log 2π` (with `K_mm + ρI`, ρ = [`FITC_RIDGE`]).
     pub value: f64,
     /// ∂nlml/∂U, M×D.
     pub grad_inducing: Mat<f64>,

@@ -87,14 +87,21 @@ impl Default for SparseTrainOptions {
 /// How the inducing-input optimisation went.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct InducingReport {
-    /// `Σ_e nlml_FITC,e` at the start and at the end.
+    /// `Σ_e nlml_FITC,e` at the initial inducing inputs.
     pub initial_nlml: f64,
+    /// `Σ_e nlml_FITC,e` at the returned inducing inputs (the sum of `output_nlml`).
     pub nlml: f64,
     /// Final FITC nlml of each output.
     pub output_nlml: Vec<f64>,
+    /// L-BFGS iterations, over all restarts.
     pub iterations: u64,
+    /// Evaluations of the summed objective (all outputs, value and gradient), including the
+    /// final one at the returned inducing inputs.
     pub evaluations: usize,
+    /// Why L-BFGS stopped; [`Termination::converged`] separates convergence from a spent
+    /// budget or a failed line search.
     pub termination: Termination,
+    /// Wall time of the whole [`train_inducing`] call.
     pub wall_time: Duration,
 }
 
@@ -105,9 +112,11 @@ pub struct SparseTrainReport {
     pub subset: Vec<usize>,
     /// Number of training points the hyper-parameters were trained on.
     pub hyper_points: usize,
+    /// Report of the hyper-parameter training (on those `hyper_points` points).
     pub hyper: TrainReport,
     /// `None` when N ≤ M (the inducing inputs are then the training inputs, not optimised).
     pub inducing: Option<InducingReport>,
+    /// Wall time of the whole call: hyper-parameters, inducing inputs and model build.
     pub wall_time: Duration,
 }
 

@@ -54,7 +54,9 @@ impl Termination {
 /// `0 < c1 < c2 < 1`. A small `c2` makes each line search more exact.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Wolfe {
+    /// Sufficient-decrease (Armijo) constant c1 (`minimize.m`'s RHO).
     pub c1: f64,
+    /// Curvature constant c2 (`minimize.m`'s SIG).
     pub c2: f64,
 }
 
@@ -71,8 +73,11 @@ impl Wolfe {
 /// Stopping rules and memory of [`minimize`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MinimizeOptions {
+    /// L-BFGS iteration budget, shared by all restarts.
     pub max_iters: u64,
+    /// Stop when `‖∇f‖₂ ≤ grad_tol` (of the unscaled objective).
     pub grad_tol: f64,
+    /// Stop when one iteration changes f by at most `rel_tol · max(|f_k|, |f_{k−1}|, 1)`.
     pub rel_tol: f64,
     /// Number of correction pairs L-BFGS keeps.
     pub memory: usize,
@@ -95,6 +100,7 @@ pub struct MinimizeResult {
     pub iterations: u64,
     /// Distinct objective evaluations (value and gradient together).
     pub evaluations: usize,
+    /// Why the last run (after any restarts) stopped.
     pub termination: Termination,
 }
 

@@ -146,6 +146,8 @@ pub struct NlmlWorkspace {
 }
 
 impl NlmlWorkspace {
+    /// Buffers for `n` training points (an n×n Cholesky workspace and two n×n matrices);
+    /// [`nlml_with_kernel`] refuses a workspace sized for another N.
     pub fn new(n: usize) -> Self {
         Self {
             spd: SpdWorkspace::new(n),
