@@ -8,11 +8,11 @@ use vicpilco_pilco::squash::TrigAug;
 /// One episode on the system.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Rollout {
-    /// H+1 noisy observations, the first from `reset`.
+    /// `len() + 1` noisy observations, the first from `reset`.
     pub observations: Vec<Vec<f64>>,
-    /// H actions (after squashing: what the system received).
+    /// `len()` actions (after squashing: what the system received).
     pub actions: Vec<Vec<f64>>,
-    /// H+1 noise-free states (from the simulator; equal to the observations on a robot that
+    /// `len() + 1` noise-free states (from the simulator; equal to the observations on a robot that
     /// cannot tell).
     pub true_states: Vec<Vec<f64>>,
     /// Per step: flags (e.g. `in_hole`) and named values the system reported.
@@ -23,9 +23,11 @@ pub struct Rollout {
 }
 
 impl Rollout {
+    /// Steps recorded: the horizon H, or fewer if the system ended the episode early.
     pub fn len(&self) -> usize {
         self.actions.len()
     }
+    /// No step was recorded: only the observation from `reset`.
     pub fn is_empty(&self) -> bool {
         self.actions.is_empty()
     }

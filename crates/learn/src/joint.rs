@@ -20,15 +20,20 @@ use vicpilco_pilco::{GaussianBar, Moments, MomentsBar};
 /// A Gaussian over all variables of a prediction step so far.
 #[derive(Clone, Debug)]
 pub struct Joint {
+    /// μ: one mean per variable, in the order appended (the starting Gaussian's first).
     pub mean: Vec<f64>,
+    /// Σ: their covariance, `dim()`×`dim()` and symmetric.
     pub cov: Mat<f64>,
 }
 
 impl Joint {
+    /// The joint of the starting Gaussian `N(mean, cov)` alone (a step's state); blocks are
+    /// appended after it.
     pub fn new(mean: Vec<f64>, cov: Mat<f64>) -> Self {
         Self { mean, cov }
     }
 
+    /// Number of variables so far, the starting ones included.
     pub fn dim(&self) -> usize {
         self.mean.len()
     }
@@ -89,11 +94,14 @@ impl Joint {
 /// symmetric until [`JointBar::into_gaussian_bar`]).
 #[derive(Clone, Debug)]
 pub struct JointBar {
+    /// μ̄: the adjoint of each entry of [`Joint::mean`], same indexing.
     pub mean: Vec<f64>,
+    /// Σ̄: the adjoint of each entry of [`Joint::cov`], `(i, j)` and `(j, i)` separately.
     pub cov: Mat<f64>,
 }
 
 impl JointBar {
+    /// Zero adjoints of a joint of `n` variables: where a reverse sweep starts accumulating.
     pub fn zeros(n: usize) -> Self {
         Self {
             mean: vec![0.0; n],
@@ -101,6 +109,7 @@ impl JointBar {
         }
     }
 
+    /// Variables still covered; each [`JointBar::pop_append`] removes its block's outputs.
     pub fn dim(&self) -> usize {
         self.mean.len()
     }

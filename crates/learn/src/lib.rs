@@ -22,17 +22,27 @@ pub mod value;
 
 use thiserror::Error;
 
+/// Why a prediction, a model fit, a replay or the learning loop failed.
 #[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum LearnError {
+    /// Parts that do not fit together: out-of-range indices, mismatched dimensions, inverted
+    /// bounds, no start distribution, an incomplete checkpoint or replay record. The text
+    /// names the field or record at fault.
     #[error("prediction set-up: {0}")]
     Spec(String),
+    /// A prediction came out NaN or infinite: an immediate cost (the text names the 1-based
+    /// step) or the return at the policy an optimisation starts from.
     #[error("non-finite prediction: {0}")]
     NonFinite(String),
+    /// Training a GP, factorising a covariance or moment matching through a GP failed.
     #[error(transparent)]
     Gp(#[from] vicpilco_gp::GpError),
+    /// A policy, squashing or cost block rejected its definition, input or parameters.
     #[error(transparent)]
     Pilco(#[from] vicpilco_pilco::PilcoError),
+    /// The system refused a reset or a step; the text is its error, prefixed `step t:` (0-based)
+    /// for a step.
     #[error("system: {0}")]
     Env(String),
 }

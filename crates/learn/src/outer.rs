@@ -48,8 +48,13 @@ pub type SuccessTest = Box<dyn Fn(&Rollout) -> bool + Send + Sync>;
 /// One learning problem: the prediction layout, cost, budgets and the system's start
 /// distribution. `P` is the policy type.
 pub struct LoopSetup<P> {
+    /// Which variables feed the policy and the dynamics GP, and the GP's targets.
     pub spec: StepSpec,
+    /// Saturation of the policy's raw output into the action bounds (`None`: the raw output
+    /// is the action).
     pub squash: Option<PartialSat>,
+    /// Immediate cost, weights, discount γ and horizon H of the predicted and recorded
+    /// returns.
     pub ret: ReturnSpec,
     /// Start distributions the predicted return is averaged over (K).
     pub prediction_starts: Vec<(Vec<f64>, Mat<f64>)>,
@@ -57,9 +62,11 @@ pub struct LoopSetup<P> {
     pub env_start: StartDistribution,
     /// Known prior mean of the GP targets per step (H rows of D0), if any.
     pub prior_shift: Option<Vec<Vec<f64>>>,
+    /// How each update trains the dynamics GP: full or sparse, training budget, cold restart.
     pub dynamics: DynamicsOptions,
     /// How each update picks its model's hyper-parameters.
     pub model_selection: ModelSelection,
+    /// Budget and line search of each update's policy optimisation.
     pub optimiser: OptimiserOptions,
     /// Roll-outs with the exploration policy before learning.
     pub initial_rollouts: usize,
@@ -68,11 +75,15 @@ pub struct LoopSetup<P> {
     /// Roll-outs after each update; only the first adds data to the GP, all count for
     /// [`EpisodeRecord::success_fraction`].
     pub rollouts_per_episode: usize,
+    /// The policy before any update: its structure, and the parameters the first update
+    /// starts from ([`Self::resume`] replaces them with the checkpoint's).
     pub policy: P,
     /// The initial roll-outs' actions: `(seed, t, observation) → action`.
     pub explore: ExplorePolicy,
     /// Did a roll-out succeed?
     pub success: SuccessTest,
+    /// Master seed: every start state, system noise and exploration stream is derived from it
+    /// per episode ([`derive_seed`]).
     pub seed: u64,
 }
 

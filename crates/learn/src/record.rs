@@ -10,16 +10,28 @@ use vicpilco_gp::Hyper;
 /// What the loop does between roll-outs, reported to an observer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Phase {
+    /// One initial roll-out with the exploration policy (reported once per roll-out, with
+    /// episode 0).
     InitialRollout,
+    /// Fitting the dynamics GP to the training roll-outs so far, and with a comparing
+    /// [`crate::selection::ModelSelection`] choosing between the refit and the previous
+    /// hyper-parameters.
     Train,
+    /// Optimising the policy on the predicted return.
     Optimise,
+    /// Running the optimised policy on the system: every roll-out of the update.
     Rollout,
 }
 
 /// Progress hooks; every method has a no-op default.
 pub trait LoopObserver {
+    /// `phase` of policy update `episode` begins (episode 0: the initial roll-outs).
     fn phase(&mut self, _episode: usize, _phase: Phase) {}
+    /// Each evaluation of the objective `j` (J, exploration term included) while update
+    /// `episode` optimises its policy, line-search trial points included.
     fn objective(&mut self, _episode: usize, _j: f64) {}
+    /// Update `record.index` is finished: optimised, rolled out and recorded (before its
+    /// [`LoopObserver::checkpoint`]).
     fn episode_done(&mut self, _record: &EpisodeRecord) {}
     /// Every roll-out as soon as it is recorded (initial ones with `episode` 0), with its
     /// weighted immediate cost per step ([`crate::outer::LoopSetup::recorded_costs`]).
@@ -48,22 +60,32 @@ pub struct EpisodeRecord {
     pub recorded_return: f64,
     /// The success test on the first roll-out.
     pub success: bool,
-    /// Roll-outs after this update and the fraction of them that succeeded.
+    /// Roll-outs after this update (at least 1); only the first adds to the GP's data.
     pub rollouts: usize,
+    /// Fraction of those roll-outs that passed the success test, in [0, 1].
     pub success_fraction: f64,
     /// System time of the roll-out, seconds.
     pub interaction_s: f64,
+    /// Wall-clock seconds of training the dynamics model, model selection included.
     pub train_s: f64,
+    /// Wall-clock seconds of the policy optimisation.
     pub optimise_s: f64,
     /// Value+gradient evaluations of the policy optimisation.
     pub evaluations: usize,
+    /// L-BFGS iterations (one line search each), at most
+    /// [`crate::outer::OptimiserOptions::length`].
     pub line_searches: u64,
+    /// Why the optimiser stopped: `gradient norm`, `relative change`,
+    /// `line-search budget (Length)` or `line search failed: …`.
     pub termination: String,
-    /// The objective J (with the exploration term) before and after optimisation.
+    /// The objective J (with the exploration term) before optimisation.
     pub objective_start: f64,
+    /// J at the policy the optimisation returned (the policy rolled out).
     pub objective_end: f64,
-    /// Training points of the dynamics model, and whether it was sparse.
+    /// Training points (recorded transitions) of the dynamics model.
     pub n_train: usize,
+    /// Whether the model was the sparse FITC GP (more training points than
+    /// [`vicpilco_gp::DynamicsOptions::sparse_threshold`]).
     pub sparse: bool,
     /// Outputs whose hyper-parameters came from the cold restart rather than the warm start
     /// (0 when the restart is off).
@@ -79,10 +101,18 @@ pub struct EpisodeRecord {
 
 /// Everything the loop produced.
 pub struct LoopOutcome<P> {
+    /// The initial roll-outs with the exploration policy (empty after
+    /// [`crate::outer::LoopSetup::resume`]).
     pub initial: Vec<Rollout>,
+    /// One record per policy update, in order; after a resume, the checkpoint's first.
     pub episodes: Vec<EpisodeRecord>,
+    /// Every roll-out of the updates this call ran, update by update; within an update the
+    /// extra test roll-outs come before the first (training) one.
     pub rollouts: Vec<Rollout>,
+    /// The policy with the last update's parameters.
     pub policy: P,
+    /// Hyper-parameters, one per GP output, of the last update's dynamics model (the chosen
+    /// one); empty if no update has run.
     pub dynamics_hyp: Vec<Hyper>,
     /// Per policy update, the long-term prediction of the optimised policy under that
     /// update's dynamics model (for predicted-vs-recorded plots).
@@ -103,5 +133,6 @@ pub struct LoopState {
     pub inducing: Option<Vec<Vec<f64>>>,
     /// The current policy's parameters.
     pub policy_params: Vec<f64>,
+    /// The records of updates 1..=`completed`.
     pub episodes: Vec<EpisodeRecord>,
 }

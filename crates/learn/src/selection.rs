@@ -205,15 +205,24 @@ fn summed_entry_score(
 /// One update's choice between the refitted and the previous hyper-parameters.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SelectionRecord {
+    /// The rule's score of the refitted model (PILCO's), lower is better: a negative log
+    /// density up to a constant, or for [`ModelSelection::LastRolloutCrps`] a CRPS in the
+    /// return's units.
     pub refit_score: f64,
+    /// The same score of the model on the same data under the previous update's
+    /// hyper-parameters unchanged.
     pub previous_score: f64,
+    /// Whether the update used the previous hyper-parameters: `previous_score < refit_score`
+    /// (a tie keeps the refit); always false under [`ModelSelection::Likelihood`].
     pub kept_previous: bool,
 }
 
 /// One comparing rule's choice between the same two models.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RuleVerdict {
+    /// The rule, one of [`ModelSelection::COMPARING`].
     pub rule: ModelSelection,
+    /// Its scores of the two models and which one it would use.
     pub choice: SelectionRecord,
 }
 

@@ -11,10 +11,21 @@ use vicpilco_gp::linalg::Chol;
 #[derive(Clone, Debug)]
 pub enum StartDistribution {
     /// `N(mean, cov)`; a zero covariance gives the mean every time.
-    Gaussian { mean: Vec<f64>, cov: Mat<f64> },
+    Gaussian {
+        /// Mean start state.
+        mean: Vec<f64>,
+        /// Its covariance (D×D, D = `mean.len()`); may be singular (factorised with jitter).
+        cov: Mat<f64>,
+    },
     /// Independent uniform entries on `[lo_i, hi_i]` (`lo_i = hi_i` fixes entry i), as the
     /// thesis's y0 ~ U(0.1, 0.3) of the variable-start VILTA run.
-    Uniform { lo: Vec<f64>, hi: Vec<f64> },
+    Uniform {
+        /// Lower bound of each state entry.
+        lo: Vec<f64>,
+        /// Upper bound of each entry: as long as `lo` and ≥ it entry by entry, or
+        /// [`StartDistribution::sample`] fails.
+        hi: Vec<f64>,
+    },
 }
 
 impl StartDistribution {

@@ -39,8 +39,11 @@ pub enum Target {
 /// special case `coefficient = 1` on their own state; this adds terms on top of them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LinearPrior {
+    /// State entry (< D0) whose next value's prior mean gains the term.
     pub target: usize,
+    /// State entry (< D0) of `x_t` the term multiplies.
     pub state: usize,
+    /// The term's factor on `x_t[state]`; must be finite.
     pub coefficient: f64,
 }
 
@@ -72,6 +75,10 @@ impl StepSpec {
         self.state_dim + 2 * self.angles.len() + self.time_input as usize
     }
 
+    /// Checks the spec against the blocks it joins: a policy with `policy_inputs` inputs and
+    /// `actions` outputs, and a GP with `gp_inputs` inputs and `gp_outputs` outputs. Fails with
+    /// [`LearnError::Spec`] naming the first field at fault: an index out of range, a count
+    /// that does not match, a non-finite prior coefficient, or `dt ≤ 0` with a time input.
     pub fn validate(
         &self,
         policy_inputs: usize,
@@ -163,17 +170,26 @@ impl StepSpec {
 /// Everything a step needs: its shape, the policy (with optional squashing), the dynamics GP
 /// and the optional prior mean.
 pub struct Predictor<'a, P: Policy> {
+    /// Which variables feed the policy and the GP, and how GP outputs become the next state.
     pub spec: &'a StepSpec,
+    /// Sine and cosine (unit amplitude) of `spec.angles`; `None` without angles.
     pub trig: Option<TrigAug>,
+    /// The policy; [`Predictor::step_backward`] adds the adjoints of its parameters.
     pub policy: &'a P,
     /// Squashing of the raw policy output (input dimension = number of actions).
     pub squash: Option<&'a PartialSat>,
+    /// The dynamics GP as moment matching uses it: inputs `[aug(x)[dyn_inputs]; u]`, one
+    /// output per state entry (`x_{t+1}` less its prior mean).
     pub dynamics: MmModel<'a>,
     /// `r(t)` per step (H rows of D0), added to the predicted mean.
     pub prior_shift: Option<&'a [Vec<f64>]>,
 }
 
 impl<'a, P: Policy> Predictor<'a, P> {
+    /// Checks that policy, squashing, GP and prior shift fit `spec` ([`StepSpec::validate`];
+    /// squashing as wide as the policy's output; `prior_shift` rows of D0 finite numbers) and
+    /// builds the angle augmentation. Fails with [`LearnError::Spec`], or
+    /// [`LearnError::Pilco`] for invalid angles.
     pub fn new(
         spec: &'a StepSpec,
         policy: &'a P,
@@ -228,6 +244,7 @@ impl<'a, P: Policy> Predictor<'a, P> {
         })
     }
 
+    /// Action dimension: the policy's outputs (squashing keeps the width).
     pub fn n_actions(&self) -> usize {
         self.policy.n_outputs()
     }
@@ -288,11 +305,15 @@ impl<C> StepTape<C> {
 
 /// The predicted action and next state of one step.
 pub struct StepOut<C> {
+    /// Mean of `x_{t+1}` (D0), prior terms and shift included.
     pub next_mean: Vec<f64>,
+    /// Covariance of `x_{t+1}` (D0×D0, symmetrised).
     pub next_cov: Mat<f64>,
     /// Mean and covariance of the (squashed) action.
     pub action_mean: Vec<f64>,
+    /// The action's covariance (A×A, A = [`Predictor::n_actions`]).
     pub action_cov: Mat<f64>,
+    /// What [`Predictor::step_backward`] needs to differentiate this step.
     pub tape: StepTape<C>,
 }
 

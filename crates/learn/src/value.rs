@@ -59,13 +59,19 @@ impl ReturnSpec {
 /// One predicted step as recorded for reports.
 #[derive(Clone, Debug)]
 pub struct PredictedStep {
+    /// Mean of `x_{t+1}` (D0) for entry `t` of a trajectory (the start state has no entry).
     pub mean: Vec<f64>,
+    /// Covariance of `x_{t+1}` (D0×D0).
     pub cov: Mat<f64>,
+    /// Mean of the (squashed) action `u_t` that led to `x_{t+1}`.
     pub action_mean: Vec<f64>,
+    /// Covariance of `u_t` (A×A).
     pub action_cov: Mat<f64>,
-    /// `E[c]`, `Var[c]` of the state cost, `E[c_a]` of the energy cost (undiscounted).
+    /// `E[c(x_{t+1})]` of the state cost, unweighted and undiscounted (0 without one).
     pub cost_mean: f64,
+    /// `Var[c(x_{t+1})]` of the state cost, unweighted (0 without one).
     pub cost_var: f64,
+    /// `E[c_a(u_t)]` of the energy cost, unweighted and undiscounted (0 without one).
     pub energy_mean: f64,
     /// The weighted immediate cost `w1 E[c] + w2 std[c] + w3 E[c_a]`.
     pub immediate: f64,
@@ -74,6 +80,9 @@ pub struct PredictedStep {
 /// The result of [`value`].
 #[derive(Clone, Debug)]
 pub struct ValueOut {
+    /// J: the discounted weighted immediate costs (exploration term included) summed over the
+    /// horizon and averaged over the start distributions; what the policy optimisation
+    /// minimises.
     pub j: f64,
     /// `dJ/dψ` in the policy's parameter order, when asked for.
     pub grad: Option<Vec<f64>>,

@@ -15,32 +15,48 @@ pub enum ReportError {
     /// The file (summary.json, or an optional file that exists) could not be read.
     #[error("{}: cannot read: {error}", file.display())]
     Read {
+        /// The file, or the PNG being inlined into report.html.
         file: PathBuf,
+        /// The I/O error (`NotFound` for an absent summary.json).
         error: std::io::Error,
     },
     /// The file, or one line of a .jsonl file, is not JSON.
     #[error("{}: {location}: not valid JSON: {error}", file.display())]
     Json {
+        /// The file at fault.
         file: PathBuf,
         /// "whole file" or "line N".
         location: String,
+        /// serde_json's parse error, with its line and column in the file or line.
         error: serde_json::Error,
     },
     /// A required field is absent (or null).
     #[error("{}: missing field `{field}`", file.display())]
-    Missing { file: PathBuf, field: String },
+    Missing {
+        /// The file the field was looked for in.
+        file: PathBuf,
+        /// Path of the field, e.g. `episodes[3].recorded_return`, prefixed `line N: ` in a
+        /// .jsonl file.
+        field: String,
+    },
     /// A field has the wrong type or shape.
     #[error("{}: field `{field}`: expected {expected}, found {found}", file.display())]
     Malformed {
+        /// The file at fault.
         file: PathBuf,
+        /// Path of the field as for [`ReportError::Missing`]; `(top level)` for the document.
         field: String,
+        /// What the field must be, e.g. `a number`.
         expected: String,
+        /// What it is, e.g. `the string "blue"` or `an array of 3 elements`.
         found: String,
     },
     /// An output file could not be written.
     #[error("{}: cannot write: {error}", file.display())]
     Write {
+        /// The output file: report.html or report.md in the run directory.
         file: PathBuf,
+        /// The I/O error.
         error: std::io::Error,
     },
     /// Two run directories of one experiment have the same seed, so the acceptance table
@@ -51,12 +67,21 @@ pub enum ReportError {
         second.display()
     )]
     DuplicateSeed {
+        /// The experiment name both summary.json files give.
         experiment: String,
+        /// The seed they share.
         seed: u64,
+        /// The run directory given first.
         first: PathBuf,
+        /// The later run directory with the same experiment and seed.
         second: PathBuf,
     },
     /// plotters failed while drawing an image.
     #[error("{}: drawing failed: {message}", file.display())]
-    Plot { file: PathBuf, message: String },
+    Plot {
+        /// The PNG or SVG being drawn.
+        file: PathBuf,
+        /// plotters' error, as text.
+        message: String,
+    },
 }

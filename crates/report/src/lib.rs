@@ -39,6 +39,7 @@ use std::path::{Path, PathBuf};
 /// What [`write_report`] wrote.
 #[derive(Clone, Debug)]
 pub struct ReportFiles {
+    /// DIR/report.html: settings, tables and every PNG inlined, readable on its own.
     pub html: PathBuf,
     /// The tables of report.html as Markdown.
     pub markdown: PathBuf,
