@@ -34,6 +34,7 @@ pub struct EvaluateOptions {
 /// One fresh start's roll-out, summarised.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StartOutcome {
+    /// The start's y (m), drawn from `start.y_range` (the config's start y without one).
     pub start_y: f64,
     /// The success test of the acceptance claims ([`arm::inserted`]).
     pub success: bool,
@@ -51,9 +52,13 @@ pub struct StartOutcome {
 /// One update's policy from every fresh start.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct UpdateEvaluation {
+    /// The update whose policy this is (0: the untrained policy).
     pub update: usize,
+    /// Starts whose roll-out inserted.
     pub successes: usize,
+    /// `successes` over the number of starts, in [0, 1].
     pub fraction: f64,
+    /// Every start's outcome, in the same order (and with the same starts) for every update.
     pub starts: Vec<StartOutcome>,
 }
 

@@ -41,39 +41,80 @@ use vicpilco_learn::outer::LoopSetup;
 use vicpilco_learn::record::{LoopObserver, LoopOutcome};
 use vicpilco_pilco::policy::Policy;
 
+/// Why a run, a resume, a replay, `rescore` or `evaluate` failed.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ExperimentError {
+    /// A name that is neither a classic benchmark nor a shipped config or alias, given without
+    /// `--config`; holds the name.
     #[error("unknown experiment `{0}` (known: {known})", known = experiment_names().join(", "))]
     Unknown(String),
+    /// A command that reads a recorded arm run was given a classic benchmark.
     #[error("`{name}` is not an arm experiment: {what} needs one")]
-    NotArm { name: String, what: &'static str },
+    NotArm {
+        /// The experiment name given.
+        name: String,
+        /// The command that needs an arm run: `rescore` or `evaluate`.
+        what: &'static str,
+    },
+    /// The arm config could not be read, parsed or validated.
     #[error(transparent)]
     Config(#[from] config::ConfigError),
+    /// The learning loop, or a roll-out outside it, failed: model fit, prediction, policy
+    /// optimisation, start sampling or the simulator during a roll-out.
     #[error(transparent)]
     Learn(#[from] vicpilco_learn::LearnError),
+    /// A policy, cost or saturation could not be built from the settings, or a recorded
+    /// parameter vector does not fit the policy.
     #[error(transparent)]
     Pilco(#[from] vicpilco_pilco::PilcoError),
+    /// The GP engine failed outside the loop, e.g. factoring the start covariance that the
+    /// classic policies' initial centres are drawn from.
     #[error(transparent)]
     Gp(#[from] vicpilco_gp::GpError),
+    /// The simulator or the OU exploration refused its configuration (a failure during a
+    /// roll-out arrives as `Learn`).
     #[error(transparent)]
     Env(#[from] vicpilco_env::EnvError),
+    /// A JSON file of the run directory could not be written.
     #[error(transparent)]
     Write(#[from] summary::WriteError),
     /// The path only: the I/O error is the source, which `{:#}` prints after it.
     #[error("{}", path.display())]
     Io {
+        /// The file or directory the failed operation was on.
         path: PathBuf,
+        /// The I/O error (`AlreadyExists` for an output `evaluate` will not overwrite).
         source: std::io::Error,
     },
+    /// `--resume` (or `--replay-from` into a directory that already holds a run) cannot
+    /// continue: no or unreadable checkpoint, another experiment, seed or setting.
     #[error("cannot resume from {path}: {message}")]
-    Resume { path: PathBuf, message: String },
+    Resume {
+        /// `checkpoint.json`, or the JSON-lines file with a bad line.
+        path: PathBuf,
+        /// What does not match or cannot be read, e.g. the first setting that differs.
+        message: String,
+    },
     /// A recorded run that `--replay-from` or `rescore` cannot replay under these settings.
     #[error("cannot replay the recorded run {path}: {message}")]
-    Replay { path: PathBuf, message: String },
+    Replay {
+        /// The recorded run's file that is malformed, incomplete or does not match
+        /// (`checkpoint.json`, or a JSON-lines file).
+        path: PathBuf,
+        /// What is wrong with it, e.g. a bad line or the first setting that differs.
+        message: String,
+    },
     /// A recorded run whose policies `evaluate` cannot roll out as asked.
     #[error("cannot evaluate the recorded run {path}: {message}")]
-    Evaluate { path: PathBuf, message: String },
+    Evaluate {
+        /// The recorded run's directory, or the file of its policies.
+        path: PathBuf,
+        /// What is wrong, e.g. an update the run does not have or no evaluation starts.
+        message: String,
+    },
+    /// The report (`report.html`, `report.md`, plots) could not be written from the run
+    /// directory.
     #[error(transparent)]
     Report(#[from] vicpilco_report::ReportError),
 }
@@ -94,7 +135,11 @@ pub fn experiment_names() -> Vec<&'static str> {
 /// What the caller chooses about a run.
 #[derive(Clone, Debug, Default)]
 pub struct RunOptions {
+    /// Master seed: every random stream of the run is derived from it and the episode
+    /// ([`vicpilco_learn::outer::derive_seed`]), so seed and settings fix the run.
     pub seed: u64,
+    /// The run directory, created if missing; a run that does not resume rewrites its
+    /// JSON-lines files from empty.
     pub out: PathBuf,
     /// Override the number of policy updates.
     pub episodes: Option<usize>,

@@ -28,12 +28,18 @@ pub const CHECKPOINT_FORMAT: u32 = 1;
 /// What `checkpoint.json` holds.
 #[derive(Serialize, Deserialize)]
 pub struct Checkpoint {
+    /// Layout version, [`CHECKPOINT_FORMAT`] when written; reading refuses any other.
     pub format: u32,
+    /// The experiment name the run was started with; a resume under another is refused.
     pub experiment: String,
+    /// The run's master seed; a resume with another is refused.
     pub seed: u64,
     /// The settings that must match to continue (everything but the number of updates).
     pub identity: serde_json::Value,
+    /// `summary.json` as of this checkpoint; a resume continues it with its `config` replaced
+    /// by the current settings.
     pub summary: Summary,
+    /// The loop after `state.completed` updates (0: after the initial roll-outs).
     pub state: LoopState,
 }
 
@@ -46,35 +52,55 @@ pub type ClaimsOf<'a> = Box<dyn Fn(&Summary) -> Vec<crate::summary::ThesisCheck>
 
 /// How predictions are labelled and weighted in `predictions.jsonl`.
 pub struct PredictionLabels {
+    /// Step length Δt (s): step t (from 0) of a prediction is labelled with time (t + 1) Δt.
     pub dt: f64,
+    /// The environment's state names, labelling each step's `mean` and `var`.
     pub state_names: Vec<String>,
+    /// The environment's action names, labelling each step's `action_mean` and `action_var`.
     pub action_names: Vec<String>,
     /// The range each (squashed) action can take, `None` without squashing: the report
     /// clips the Gaussian summary's band to it, since no applied action lies outside.
     pub action_bounds: Option<Vec<(f64, f64)>>,
-    /// w1 and w3 of the return: the weighted cost per step is `w1 E[c] + w3 E[c_a]`.
+    /// w1 of the return: the weighted cost per step is `w1 E[c] + w3 E[c_a]`.
     pub w_mean: f64,
+    /// w3, the energy cost's weight in that sum (0 without an energy cost).
     pub w_energy: f64,
 }
 
 /// The observer that writes the run directory; forwards to the caller's observer.
 pub struct Recorder<'a> {
+    /// The caller's observer (progress, logs): every callback is forwarded after the files
+    /// are written.
     pub inner: &'a mut dyn LoopObserver,
+    /// The summary so far, rewritten to `summary.json` after every update.
     pub summary: Summary,
+    /// The run directory all files go to.
     pub dir: PathBuf,
+    /// Step length Δt (s): each roll-out adds its steps × Δt to `summary.interaction_s`.
     pub dt: f64,
+    /// How `predictions.jsonl`'s lines are labelled and weighted.
     pub labels: PredictionLabels,
+    /// Gives `final_x`, `max_force` and `start_y` of each update's first roll-out (arm runs;
+    /// `None`: they and the final gains stay null).
     pub extras: Option<RolloutExtras>,
+    /// The settings written into every checkpoint ([`Checkpoint::identity`]).
     pub identity: serde_json::Value,
+    /// The thesis claims re-decided after every update (arm runs); `None`: no claims.
     pub claims: Option<ClaimsOf<'a>>,
     /// Wall time of earlier sessions of this run (resumed runs).
     pub wall_before: f64,
+    /// When this session began; [`Recorder::wall_s`] adds its elapsed time to `wall_before`.
     pub started: Instant,
+    /// `rollouts.jsonl`, open for appending ([`open_jsonl`]).
     pub rollouts: std::fs::File,
+    /// `predictions.jsonl`, open for appending.
     pub predictions: std::fs::File,
+    /// `policies.jsonl`, open for appending.
     pub policies: std::fs::File,
     /// The first roll-out of the update in progress, and the last one of the run.
     pub current: Option<Rollout>,
+    /// The first write error. The observer's callbacks cannot fail, so the loop runs on (later
+    /// errors are logged only) and the caller returns this one after it.
     pub error: Option<ExperimentError>,
 }
 

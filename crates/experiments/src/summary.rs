@@ -7,14 +7,19 @@ use vicpilco_learn::record::EpisodeRecord;
 /// One policy update as `summary.json` lists it: the loop's record plus what the task adds.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct EpisodeSummary {
+    /// The loop's record of the update (returns, success, timings, model); its fields sit
+    /// directly in this JSON object.
     #[serde(flatten)]
     pub record: EpisodeRecord,
     /// `green`: every roll-out of the update succeeded, `yellow`: some, `red`: none (the
     /// thesis's Figs. 5-6, 5-7, 5-12).
     pub colour: String,
-    /// Arm runs, first roll-out: x at the end (m), largest |f| over the steps (N), start y (m).
+    /// Arm runs, first roll-out: x at the end (m); `null` for the classic benchmarks.
     pub final_x: Option<f64>,
+    /// Arm runs, first roll-out: the largest contact force |f| over its steps (N)
+    /// ([`crate::arm::largest_force`]).
     pub max_force: Option<f64>,
+    /// Arm runs, first roll-out: the start's y (m), drawn from `start.y_range` when set.
     pub start_y: Option<f64>,
 }
 
@@ -54,9 +59,11 @@ pub struct ThesisCheck {
     /// Stable name of the claim, the same in every run that makes it (the text may be reworded).
     #[serde(default)]
     pub id: String,
+    /// The claim as checked, with its bar, e.g. `mean recorded return over updates 6-10 <= 75`.
     pub claim: String,
     /// What the thesis reports.
     pub thesis: String,
+    /// What the run measured for the claim, as text (`n.a.` while it lacks the updates).
     pub measured: String,
     /// `None` when the run is too short to decide.
     pub pass: Option<bool>,
@@ -70,7 +77,9 @@ pub struct ThesisCheck {
 /// of `seeds` (issue 6, "How it is checked"); `passing == seeds` for "every run".
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct SeedRule {
+    /// How many of the runs must pass, at least.
     pub passing: usize,
+    /// Acceptance runs the claim is judged over, one per seed (issue 6: 5).
     pub seeds: usize,
 }
 
@@ -118,15 +127,19 @@ pub const VERSION_TEXT: &str = concat!(
 /// The run summary written to `DIR/summary.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Summary {
+    /// The experiment name as given to [`crate::run`] (an alias such as `vil-gic` is kept).
     pub experiment: String,
+    /// The run's master seed ([`crate::RunOptions::seed`]).
     pub seed: u64,
     /// Impedance law of arm runs (`gic`, `sic`); `null` otherwise.
     pub controller: Option<String>,
+    /// The policy's structure, e.g. `rbf (10 basis functions, 4 inputs)` or `linear (4 inputs)`.
     pub policy: String,
     /// Learnable policy parameters.
     pub n_params: usize,
     /// Recorded return of the first initial (exploration) roll-out.
     pub initial_return: Option<f64>,
+    /// One entry per completed policy update, in order (index 1 first).
     pub episodes: Vec<EpisodeSummary>,
     /// The first policy update at which the success test had held for the last
     /// [`SOLVED_STREAK`] consecutive updates; `null` if never.
@@ -166,8 +179,11 @@ pub struct Summary {
 /// The final policy from fresh starts (`final_eval.jsonl` holds the roll-outs).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FinalEval {
+    /// Fresh starts the policy was rolled out from (`vilta.evaluation_starts`).
     pub starts: usize,
+    /// Roll-outs that inserted ([`crate::arm::inserted`]).
     pub successes: usize,
+    /// `successes / starts`, in [0, 1]; the claim `fresh_starts_insert` needs ≥ 0.8.
     pub fraction: f64,
     /// The update whose policy was evaluated (`vilta.final_policy`); absent in summaries
     /// written before the rule, which evaluated the last update's.
@@ -190,16 +206,27 @@ pub fn solved_at<E: std::ops::Deref<Target = EpisodeRecord>>(episodes: &[E]) -> 
     None
 }
 
+/// Why a JSON file of the run directory (`summary.json`, a checkpoint, a JSON line) was not
+/// written.
 #[derive(Debug, thiserror::Error)]
 pub enum WriteError {
     /// The path only: the I/O error is the source, which `{:#}` prints after it.
     #[error("{path}")]
     Io {
+        /// The file being written; the failed step may be on its `.json.tmp` sibling.
         path: String,
+        /// The error of the failed create, write, sync or rename.
         source: std::io::Error,
     },
+    /// A NaN or ±∞, which JSON cannot hold: refused rather than written as `null`.
     #[error("{what} is {value}: refusing to write it as JSON null")]
-    NonFinite { what: String, value: f64 },
+    NonFinite {
+        /// Where the number is, e.g. `episode 3 recorded_return`.
+        what: String,
+        /// The offending value: NaN, +∞ or −∞.
+        value: f64,
+    },
+    /// serde_json could not serialise the value.
     #[error("serialising {0}")]
     Json(#[from] serde_json::Error),
 }

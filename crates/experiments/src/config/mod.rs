@@ -44,18 +44,30 @@ pub const ALIASES: &[(&str, &str)] = &[("vil-gic", "vil-gic-rbf10")];
 /// A bad config: which file, which key, what is wrong.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
+    /// The text is not TOML, or has an unknown key, a missing one or a value of the wrong type.
     #[error("{file}: {message}")]
-    Parse { file: String, message: String },
+    Parse {
+        /// The file's label: the path as given, or `experiments/<name>.toml` when shipped.
+        file: String,
+        /// The TOML parser's error, with line and column.
+        message: String,
+    },
+    /// A value out of range or against a cross-field rule ([`ArmExperiment::validate`]).
     #[error("{file}: `{key}` {message}")]
     Invalid {
+        /// The file's label, as in `Parse`.
         file: String,
+        /// Dotted key of the first bad value, indexed in arrays, e.g. `policy.lengthscales[2]`.
         key: String,
+        /// The rule broken and the value given, e.g. `must be a finite number > 0, got -1`.
         message: String,
     },
     /// The path only: the I/O error is the source, which `{:#}` prints after it.
     #[error("{path}")]
     Read {
+        /// The config file, as given.
         path: String,
+        /// Why it could not be read.
         source: std::io::Error,
     },
 }
@@ -64,7 +76,11 @@ pub enum ConfigError {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Task {
+    /// `"vil"` (§5-4): the policy sets (k_x, k_y), m = 2; the reference follows the given
+    /// min-jerk plan through the hole.
     Vil,
+    /// `"vilta"` (§5-5): the policy sets (k_x, k_y, Δx_ref, Δy_ref), m = 4, with the hole's
+    /// position unknown; needs `[vilta]`, `initial.scan` and `policy.delta_max`.
     Vilta,
 }
 
@@ -72,7 +88,10 @@ pub enum Task {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum PolicyKind {
+    /// `"linear"`: a = sat(A s + b) on the policy inputs s; n_ψ = m (n_π + 1).
     Linear,
+    /// `"rbf"`: a deterministic GP (RBF network) of `policy.n_basis` Gaussian basis functions
+    /// with learnable centres, pseudo-targets and length-scales, then saturated (§4-3).
     Rbf,
 }
 
@@ -80,18 +99,26 @@ pub enum PolicyKind {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ArmExperiment {
+    /// `"vil"` or `"vilta"` ([`Task`]): what the policy controls, and so which keys are
+    /// required or refused.
     pub task: Task,
     /// Impedance law: `gic` or `sic`.
     pub controller: ControllerKind,
     /// Policy updates after the initial roll-out (VIL: Table 5-4, N = 25).
     pub episodes: usize,
-    /// Learning steps H and their length Δt (s) (Table 5-1: 100 × 0.1 s).
+    /// Learning steps H per episode (Table 5-1: 100 × 0.1 s); the return is undiscounted.
     pub horizon: usize,
+    /// Length Δt of a learning step (s) (Table 5-1: 0.1); each action is held over one step.
     pub dt: f64,
+    /// `[policy]`: family, stiffness limits and initial parameters (Tables 5-2, 5-6).
     pub policy: PolicyConfig,
+    /// `[cost]`: the saturating costs and the return's weights (Tables 5-3, 5-5).
     pub cost: CostConfig,
+    /// `[optimiser]`: the L-BFGS policy search of each update (Table 5-4).
     pub optimiser: OptimiserConfig,
+    /// `[gp]`: the dynamics GP's inputs, prior mean, sparse approximation and fits (Table 5-1).
     pub gp: GpConfig,
+    /// `[start]`: where real roll-outs start, and the prediction's start distribution(s).
     pub start: StartConfig,
     /// Initial (exploration) roll-out.
     pub initial: InitialConfig,
@@ -114,15 +141,21 @@ fn is_on(b: &bool) -> bool {
     *b
 }
 
+/// `[policy]`: the policy family, the saturation of its actions and its initial parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PolicyConfig {
+    /// `"linear"` or `"rbf"` ([`PolicyKind`]); `n_basis`, `lengthscales` and `snr` are required
+    /// with `"rbf"` and refused with `"linear"`.
     pub kind: PolicyKind,
     /// RBF basis functions N_c (RBF only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub n_basis: Option<usize>,
-    /// Stiffness range of the partial non-negative saturation (N/m).
+    /// Lower end of the stiffness range [k_min, k_max] of the partial non-negative saturation
+    /// (N/m) (eq. 4-23; Table 5-2: 5); also the OU profiles' lower limit.
     pub k_min: f64,
+    /// Upper end of that range (N/m): 250 under GIC (Table 5-2), 500 under SIC (§5-4-2). Also
+    /// the energy cost's scale S = diag(k_max²) and the OU profiles' upper limit.
     pub k_max: f64,
     /// VILTA: |Δx_ref|, |Δy_ref| limit per `delta_tick` (m) (Table 5-6: 0.0025).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -143,14 +176,20 @@ pub struct PolicyConfig {
     pub init_from_scan: bool,
 }
 
+/// `[cost]`: the saturating position and force costs and the weights of the return, relative
+/// to w1 = 1 on the saturating costs' mean (Tables 5-3, 5-5).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CostConfig {
-    /// Which of (x, y) the position cost measures, and its target there.
+    /// Which of `"x"`, `"y"` the position cost measures (1 or 2, distinct): both for VIL
+    /// (Table 5-3); x only for VILTA, whose hole position is unknown (Table 5-5).
     pub position_dims: Vec<String>,
+    /// The position cost's target (m), one entry per `position_dims` entry: the end of the
+    /// hole, (0.75, 0.20) for VIL and x = 0.80 in VILTA's shifted scene.
     pub position_target: Vec<f64>,
-    /// Width of the position cost (m) and of the force cost on (f_x, f_y) (N).
+    /// Width of the saturating position cost (m) (Tables 5-3, 5-5: 0.05).
     pub position_width: f64,
+    /// Width (N) of the saturating cost on (f_x, f_y), target 0 (Tables 5-3, 5-5: 20).
     pub force_width: f64,
     /// Ours, off unless set: the width (N) of a second saturating cost on (f_x, f_y), target 0,
     /// wider than `force_width`. The thesis's 20 N cost is flat at 1 beyond about 60 N, so a
@@ -165,6 +204,7 @@ pub struct CostConfig {
     pub w_energy: f64,
 }
 
+/// `[optimiser]`: the L-BFGS search over the policy parameters at each update (Table 5-4).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OptimiserConfig {
@@ -198,14 +238,19 @@ pub enum PriorMean {
     Zero,
 }
 
+/// `[gp]`: the dynamics GP's inputs and prior mean, its sparse approximation and the fit of its
+/// hyper-parameters at each update (Table 5-1, §5-6-1).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GpConfig {
     /// Time as a GP input (VIL: yes; VILTA: no).
     pub time_input: bool,
+    /// The relative targets' prior mean ([`PriorMean`]): `"reference"` for VIL (§4-1-2);
+    /// VILTA, which has no given reference, requires `"zero"`.
     pub prior_mean: PriorMean,
     /// Full GP up to this many points, FITC above.
     pub sparse_threshold: usize,
+    /// Inducing inputs of the FITC approximation (Table 5-1: N_ii = 300; §5-6-1).
     pub n_inducing: usize,
     /// Above the sparse threshold the hyper-parameters are fitted on a random subset of this
     /// many points (ours: all of up to 2600 points would cost O(N³) per evaluation).
@@ -254,6 +299,8 @@ fn is_likelihood(s: &ModelSelection) -> bool {
     *s == ModelSelection::Likelihood
 }
 
+/// `[start]`: the real roll-outs' start state and the long-term prediction's Gaussian start
+/// distribution(s).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StartConfig {
@@ -269,6 +316,8 @@ pub struct StartConfig {
     pub prediction_y: Option<Vec<f64>>,
 }
 
+/// `[initial]`: the exploration roll-out before the first update (OU stiffness profiles; for
+/// VILTA also the scan that sets the reference increments).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InitialConfig {
@@ -296,6 +345,8 @@ pub struct ScanJitter {
     pub theta: f64,
 }
 
+/// `[vilta]`: required by VILTA runs and refused by VIL ones: the shifted scene, the Δ actions'
+/// tick, roll-outs per iteration, the final evaluation and the reference's lead.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ViltaConfig {
