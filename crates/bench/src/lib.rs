@@ -12,16 +12,25 @@ use vicpilco_pilco::cost::CostSum;
 use vicpilco_pilco::policy::RbfPolicy;
 use vicpilco_pilco::squash::{PartialSat, SatRange};
 
+/// Why [`W1::load`] failed.
 #[derive(Debug, thiserror::Error)]
 pub enum WorkloadError {
     /// The path only: the I/O error is the source, which `{:#}` prints after it.
     #[error("{}", path.display())]
     Io {
+        /// The workload file.
         path: PathBuf,
+        /// The read error.
         source: std::io::Error,
     },
+    /// The file is not JSON, or a field of [`W1`] is missing or has the wrong type.
     #[error("{path}: not a valid workload: {detail}")]
-    Parse { path: PathBuf, detail: String },
+    Parse {
+        /// The workload file.
+        path: PathBuf,
+        /// `serde_json`'s message (names the field, line and column).
+        detail: String,
+    },
 }
 
 /// Workload W1: a VIL-sized PILCO problem (D = 6 states, U = 2 actions, N = 300, 50 basis
@@ -29,31 +38,57 @@ pub enum WorkloadError {
 #[derive(Clone, Debug, Deserialize)]
 #[allow(non_snake_case)]
 pub struct W1 {
+    /// D = 6 states; the first D columns of `X`.
     pub state_dim: usize,
+    /// U = 2 actions; the last U columns of `X`.
     pub action_dim: usize,
+    /// N = 300, the rows of `X` and `Y` (as stated in the file; not checked against them).
     pub n_train: usize,
+    /// 50, the rows of `policy_inputs` and `policy_targets`.
     pub n_basis: usize,
+    /// H = 100 predicted steps in `J`.
     pub horizon: usize,
+    /// Dynamics-GP training inputs, N×(D+U): state, then action.
     pub X: Vec<Vec<f64>>,
+    /// Dynamics-GP training targets, N×D: state differences `x_{t+1} − x_t`.
     pub Y: Vec<Vec<f64>>,
+    /// Dynamics-GP log length-scales, (D+U)×D, column e for output e.
     pub dyn_log_lengthscales: Vec<Vec<f64>>,
+    /// Dynamics-GP `log σ_f` (signal std), one per output.
     pub dyn_log_signal_std: Vec<f64>,
+    /// Dynamics-GP `log σ_n` (noise std), one per output.
     pub dyn_log_noise_std: Vec<f64>,
+    /// Training start, (D+U)×D: the log sample std of each input column (pilco-matlab's init).
     pub train_init_log_lengthscales: Vec<Vec<f64>>,
+    /// Training start: the log sample std of each target column.
     pub train_init_log_signal_std: Vec<f64>,
+    /// Training start: `log(std/10)` of each target column.
     pub train_init_log_noise_std: Vec<f64>,
+    /// RBF policy centres, `n_basis`×D, on all states.
     pub policy_inputs: Vec<Vec<f64>>,
+    /// RBF policy pseudo-targets, `n_basis`×U, column u for action u.
     pub policy_targets: Vec<Vec<f64>>,
+    /// RBF policy log length-scales, D×U, column u for action u.
     pub policy_log_lengthscales: Vec<Vec<f64>>,
+    /// Policy σ_f, not a log (1, fixed); only the ratio to `policy_noise_std` is used.
     pub policy_signal_std: f64,
+    /// Policy σ_n, not a log (0.01, fixed): SNR `policy_signal_std / policy_noise_std`.
     pub policy_noise_std: f64,
+    /// `gSat`'s `e` per action: action u is squashed onto `[−max_action[u], max_action[u]]`.
     pub max_action: Vec<f64>,
+    /// Mean of the Gaussian start state (D).
     pub m0: Vec<f64>,
+    /// Covariance of the start state, D×D (1e-3 I).
     pub S0: Vec<Vec<f64>>,
+    /// Cost target `z` (D); only the entries on `cost_dims` matter.
     pub cost_target: Vec<f64>,
+    /// Cost width w = 0.25; informational, `cost_W` already holds `1/w²`.
     pub cost_width: f64,
+    /// State dims the cost sees (`[0, 2]`); informational, encoded in the zeros of `cost_W`.
     pub cost_dims: Vec<usize>,
+    /// `lossSat`'s `W`, D×D: `diag(1/w²)` on `cost_dims`, 0 elsewhere.
     pub cost_W: Vec<Vec<f64>>,
+    /// Discount γ (1.0) in `J = Σ_{t=1..H} γ^t E[c(x_t)]`.
     pub gamma: f64,
 }
 
@@ -65,6 +100,8 @@ pub fn default_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/bench")
 }
 
+/// A matrix stored as an array of rows (the workload's format); the column count is the first
+/// row's length (0×0 when empty). Panics if a later row is shorter.
 pub fn rows_to_mat(rows: &[Vec<f64>]) -> Mat<f64> {
     let c = rows.first().map_or(0, Vec::len);
     Mat::from_fn(rows.len(), c, |i, j| rows[i][j])
@@ -82,6 +119,8 @@ pub fn hypers(log_ls: &[Vec<f64>], log_sf: &[f64], log_sn: &[f64]) -> Vec<Hyper>
 }
 
 impl W1 {
+    /// Read and deserialise `w1.json`. Sizes are not cross-checked here; inconsistent ones
+    /// fail in [`W1::problem`] or [`W1::dynamics_gp`].
     pub fn load(path: &Path) -> Result<Self, WorkloadError> {
         let text = std::fs::read_to_string(path).map_err(|e| WorkloadError::Io {
             path: path.to_path_buf(),
@@ -118,15 +157,24 @@ impl W1 {
 
 /// The W1 prediction problem, ready for [`vicpilco_learn::value::value`].
 pub struct W1Problem {
+    /// One step: the policy and the GP see all D states (no angles, no time input), every
+    /// target is a state difference.
     pub spec: StepSpec,
+    /// PILCO's `congp` from the `policy_*` fields, SNR `policy_signal_std / policy_noise_std`.
     pub policy: RbfPolicy,
+    /// `gSat` on every action with amplitude `max_action` (symmetric ranges).
     pub squash: PartialSat,
+    /// The full GP on `[x; u]` with the workload's `dyn_*` hyper-parameters.
     pub dynamics: GpModel,
+    /// `lossSat(cost_W, cost_target)` on the whole state, weight 1 on `E[c]`, no energy cost.
     pub ret: ReturnSpec,
+    /// The start distribution `(m0, S0)`.
     pub start: (Vec<f64>, Mat<f64>),
 }
 
 impl W1Problem {
+    /// The step predictor over these parts, with model uncertainty (PILCO's `gp0`) and no
+    /// prior shift; fails if the sizes of spec, policy, squashing and GP disagree.
     pub fn predictor(&self) -> Result<Predictor<'_, RbfPolicy>, vicpilco_learn::LearnError> {
         Predictor::new(
             &self.spec,
@@ -193,16 +241,22 @@ impl W1 {
 /// Median wall times of the W1 operations (bench README, "Timed operations").
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct W1Timings {
+    /// Seconds for `J` over the horizon, without gradient.
     pub forward_s: f64,
+    /// Seconds for `J` and `dJ/dψ` over all policy parameters in one call.
     pub value_grad_s: f64,
+    /// Seconds to train the D dynamics GPs from `train_init_*` (see [`W1::time`]).
     pub train_s: f64,
+    /// `J` of the last forward repetition, serialised as `J` (reference 92.6720698716).
     #[serde(rename = "J")]
     pub j: f64,
     /// `‖dJ/d(policy inputs, targets)‖₂` (reference 149.55171269).
     pub grad_norm_inputs_targets: f64,
     /// Final penalised negative log marginal likelihood per output after training.
     pub train_nlml: Vec<f64>,
+    /// Timed repetitions per operation (at least 1), warm-up not counted.
     pub repetitions: usize,
+    /// `RAYON_NUM_THREADS` when a positive number, else the available parallelism.
     pub threads: usize,
     /// Peak resident memory of the process (VmHWM), MB, when the OS reports it.
     pub peak_memory_mb: Option<f64>,

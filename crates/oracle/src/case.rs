@@ -8,11 +8,14 @@ use std::path::{Path, PathBuf};
 /// A dense array of any rank, row-major (last index fastest), as the oracle stores it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tensor {
+    /// Length of each axis, outermost first (the oracle's `[E, E, D]`); empty for a scalar.
     pub shape: Vec<usize>,
+    /// The `shape.iter().product()` entries, row-major.
     pub data: Vec<f64>,
 }
 
 impl Tensor {
+    /// Panics unless `data` holds exactly `shape.iter().product()` entries.
     pub fn new(shape: Vec<usize>, data: Vec<f64>) -> Self {
         assert_eq!(
             shape.iter().product::<usize>(),
@@ -22,19 +25,23 @@ impl Tensor {
         Self { shape, data }
     }
 
+    /// All entries 0, `shape.iter().product()` of them.
     pub fn zeros(shape: Vec<usize>) -> Self {
         let n = shape.iter().product();
         Self::new(shape, vec![0.0; n])
     }
 
+    /// Rank 0 (shape `[]`), as the oracle stores bare numbers such as `lossSat`'s `L`.
     pub fn scalar(v: f64) -> Self {
         Self::new(vec![], vec![v])
     }
 
+    /// Rank 1, shape `[v.len()]`.
     pub fn from_vec(v: &[f64]) -> Self {
         Self::new(vec![v.len()], v.to_vec())
     }
 
+    /// Rank 2, shape `[rows, cols]`, laid out like the oracle's arrays of rows.
     pub fn from_mat(m: &Mat<f64>) -> Self {
         let (r, c) = (m.nrows(), m.ncols());
         let mut data = Vec::with_capacity(r * c);
@@ -57,6 +64,7 @@ impl Tensor {
         }
     }
 
+    /// `max |entry|` (0 when empty): the scale of the oracle README's tolerance rule.
     pub fn max_abs(&self) -> f64 {
         self.data.iter().fold(0.0, |a, v| a.max(v.abs()))
     }
@@ -81,13 +89,19 @@ impl Tensor {
 /// One case file: its kind, name and raw fields.
 #[derive(Clone, Debug)]
 pub struct Case {
+    /// The file's `kind` field (e.g. `gp1`), empty when absent; picks the [`crate::Tolerance`].
     pub kind: String,
+    /// The file's `case` field (e.g. `D3_E2_N30_M30_induceX`), else the file stem;
+    /// `<parent>.<key>` for a [`Case::sub`].
     pub name: String,
+    /// The JSON file it was read from (shared by its sub-cases); errors name it.
     pub path: PathBuf,
     fields: Map<String, Value>,
 }
 
 impl Case {
+    /// Read one `<kind>/<case>.json`; fails with [`OracleError::Io`], or [`OracleError::Parse`]
+    /// when it is not JSON or not an object. Fields are only checked by the typed getters.
     pub fn load(path: &Path) -> Result<Self, OracleError> {
         let text = std::fs::read_to_string(path).map_err(|e| OracleError::Io {
             path: path.to_path_buf(),
@@ -140,10 +154,13 @@ impl Case {
         }
     }
 
+    /// Whether the object (the nested one, for a sub-case) has the key `name`.
     pub fn has(&self, name: &str) -> bool {
         self.fields.contains_key(name)
     }
 
+    /// Field `name` of any rank: nested arrays (first index outermost) flattened row-major, a
+    /// bare number as rank 0. Fails when the field is missing, ragged or not numeric.
     pub fn tensor(&self, name: &str) -> Result<Tensor, OracleError> {
         let mut shape = Vec::new();
         let mut data = Vec::new();
@@ -151,6 +168,7 @@ impl Case {
         Ok(Tensor::new(shape, data))
     }
 
+    /// Field `name` stored as an array of rows; fails unless it has rank 2.
     pub fn mat(&self, name: &str) -> Result<Mat<f64>, OracleError> {
         let t = self.tensor(name)?;
         if t.shape.len() != 2 {
@@ -159,6 +177,7 @@ impl Case {
         Ok(t.to_mat())
     }
 
+    /// Field `name` stored as a flat array; fails unless it has rank 1 (a bare number fails).
     pub fn vec(&self, name: &str) -> Result<Vec<f64>, OracleError> {
         let t = self.tensor(name)?;
         if t.shape.len() != 1 {
@@ -167,12 +186,14 @@ impl Case {
         Ok(t.data)
     }
 
+    /// Field `name` stored as a bare JSON number (`[x]` fails), e.g. `gamma`.
     pub fn scalar(&self, name: &str) -> Result<f64, OracleError> {
         self.field(name)?
             .as_f64()
             .ok_or_else(|| self.bad(name, "expected a number"))
     }
 
+    /// A size such as `D`, `P` or `H`: a bare number that must be a non-negative integer.
     pub fn usize(&self, name: &str) -> Result<usize, OracleError> {
         let v = self.scalar(name)?;
         if v < 0.0 || v.fract() != 0.0 {
@@ -181,6 +202,7 @@ impl Case {
         Ok(v as usize)
     }
 
+    /// Field `name` stored as a JSON string, e.g. `policy_type` of the value cases.
     pub fn string(&self, name: &str) -> Result<String, OracleError> {
         self.field(name)?
             .as_str()

@@ -16,40 +16,78 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
+/// Why the oracle directory or one case could not be checked. Every variant names the
+/// directory or case file, so the message can be printed unchanged. A case that loads but
+/// disagrees with vicpilco is no error: it is a failing [`Comparison`].
 #[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum OracleError {
+    /// The directory or one of its `<kind>/` folders cannot be listed, or it holds no kind
+    /// folder at all.
     #[error("oracle directory {path}: {detail}")]
-    Dir { path: PathBuf, detail: String },
+    Dir {
+        /// The directory that failed.
+        path: PathBuf,
+        /// The I/O error's message, or what is missing.
+        detail: String,
+    },
     /// The path only: the I/O error is the source, which `{:#}` prints after it.
     #[error("{}", path.display())]
     Io {
+        /// The case file that could not be read.
         path: PathBuf,
+        /// The read error.
         source: std::io::Error,
     },
+    /// A case file is not JSON, or its top level is not an object.
     #[error("{path}: not valid JSON: {detail}")]
-    Parse { path: PathBuf, detail: String },
-    #[error("{path}: field `{field}`: {detail}")]
-    Field {
+    Parse {
+        /// The case file.
         path: PathBuf,
-        field: String,
+        /// `serde_json`'s message (with line and column), or `top level is not a JSON object`.
         detail: String,
     },
+    /// A field a checker needs is missing or has the wrong type or shape (e.g. a vector where
+    /// a matrix is expected, a ragged array, a 0 in a `*_1based` index set).
+    #[error("{path}: field `{field}`: {detail}")]
+    Field {
+        /// The case file.
+        path: PathBuf,
+        /// The JSON key; for a [`Case::sub`] the key inside the nested object (e.g. `dSds`).
+        field: String,
+        /// What is wrong: `missing`, `expected a matrix, shape [3]`, ….
+        detail: String,
+    },
+    /// vicpilco returned an error for the case's inputs (a constructor or forward pass refused
+    /// them), or the sizes of what it built disagree with the case's (`D`, `P`).
     #[error("{path}: vicpilco refused the case: {detail}")]
-    Compute { path: PathBuf, detail: String },
+    Compute {
+        /// The case file.
+        path: PathBuf,
+        /// vicpilco's error message, or which sizes disagree.
+        detail: String,
+    },
 }
 
 /// A checker computes one kind of case with vicpilco and compares every stored output.
 pub trait KindChecker: Sync {
+    /// The `<kind>/` folder it checks, named after the PILCO function (`gp0`, `gSat`, …).
     fn kind(&self) -> &'static str;
+    /// Rebuild `case`'s inputs in vicpilco, compute and compare every array the case stores.
+    /// `Err` when a field cannot be read or vicpilco refuses the inputs; an empty vector is
+    /// counted as a failure by [`check_files`].
     fn check(&self, case: &Case) -> Result<Vec<Comparison>, OracleError>;
 }
 
 /// The outcome of all cases of one kind.
 #[derive(Clone, Debug, Default)]
 pub struct KindReport {
+    /// Case files found, including skipped and unloadable ones.
     pub cases: usize,
+    /// Cases that compared at least one array and whose every [`Comparison`] passed.
     pub passed: usize,
+    /// Largest [`Comparison::rel_err`] over all arrays of all cases (0 when nothing was
+    /// compared); `+∞` when a case failed to load or compute, or an array's shape disagreed.
     pub max_rel_err: f64,
     /// No checker exists for this kind yet.
     pub skipped: bool,

@@ -57,8 +57,11 @@ pub use vicpilco_gp::moments::Moments;
 /// Adjoints of a block's outputs (`M̄`, `S̄`, `V̄`/`C̄`); `v = None` means `V̄ = 0`.
 #[derive(Clone, Debug)]
 pub struct MomentsBar {
+    /// `M̄` (E): adjoint of the output mean.
     pub mean: Vec<f64>,
+    /// `S̄` (E×E): `S̄_ij` is the adjoint of the entry `S_ij` as computed (need not be symmetric).
     pub cov: Mat<f64>,
+    /// `V̄` / `C̄` (D×E): adjoint of `v = s⁻¹ Cov[x, y]`; `None` when nothing depends on `v`.
     pub v: Option<Mat<f64>>,
 }
 
@@ -76,11 +79,15 @@ impl MomentsBar {
 /// Adjoints of an input Gaussian: `m̄` and the symmetrised `s̄` (see the crate docs).
 #[derive(Clone, Debug)]
 pub struct GaussianBar {
+    /// `m̄` (D): `∂f/∂m`.
     pub mean: Vec<f64>,
+    /// `s̄` (D×D): `∂f/∂s` with the entries of `s` independent, symmetrised `(G + Gᵀ)/2`.
     pub cov: Mat<f64>,
 }
 
 impl GaussianBar {
+    /// All-zero adjoints of a D-dimensional input: the start of an accumulation, or of a unit
+    /// adjoint with one entry set.
     pub fn zeros(d: usize) -> Self {
         Self {
             mean: vec![0.0; d],
@@ -103,7 +110,10 @@ pub struct CostMoments {
 /// Adjoints of a scalar cost's outputs; `v = None` means zero.
 #[derive(Clone, Debug, Default)]
 pub struct CostBar {
+    /// Adjoint of `E[c]`.
     pub mean: f64,
+    /// Adjoint of `Var[c]`; for saturating costs it acts on the unclamped variance.
     pub var: f64,
+    /// `C̄` (D): adjoint of `s⁻¹ Cov[x, c]`; `None` when nothing depends on it.
     pub v: Option<Vec<f64>>,
 }

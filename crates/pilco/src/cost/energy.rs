@@ -65,6 +65,7 @@ impl EnergyCost {
         })
     }
 
+    /// U, the length of the action `a`, excluded dimensions included.
     pub fn n_inputs(&self) -> usize {
         self.lambda.len()
     }

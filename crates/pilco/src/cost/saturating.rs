@@ -95,14 +95,17 @@ impl SaturatingCost {
         })
     }
 
+    /// `J`: the state dimensions the cost sees, in the order of the rows of `W` and of `z`.
     pub fn dims(&self) -> &[usize] {
         &self.dims
     }
 
+    /// `W` (|J|×|J|), symmetrised at construction; row a belongs to `dims()[a]`.
     pub fn w(&self) -> &Mat<f64> {
         &self.w
     }
 
+    /// The target `z` (|J|), entry a for state dimension `dims()[a]`.
     pub fn target(&self) -> &[f64] {
         &self.z
     }
@@ -178,10 +181,12 @@ impl CostSum {
         Self::new(d, vec![SaturatingCost::new(&dims, w, z)?])
     }
 
+    /// D, the length of the state `x` the costs are evaluated on.
     pub fn n_inputs(&self) -> usize {
         self.d
     }
 
+    /// The summands `c_k`, in the order given to [`CostSum::new`].
     pub fn costs(&self) -> &[SaturatingCost] {
         &self.costs
     }

@@ -59,10 +59,12 @@ impl LinearPolicy {
         }
     }
 
+    /// The weights `w` (E×D), `p[E..]` column-major in [`Policy::params`].
     pub fn w(&self) -> &Mat<f64> {
         &self.w
     }
 
+    /// The offset `b` (E), the action at `x = 0`; `p[..E]` in [`Policy::params`].
     pub fn b(&self) -> &[f64] {
         &self.b
     }

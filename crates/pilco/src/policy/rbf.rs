@@ -19,6 +19,11 @@ use vicpilco_gp::{GpModel, Hyper};
 /// Signal-to-noise ratio PILCO fixes for its RBF policy.
 pub const DEFAULT_SNR: f64 = 100.0;
 
+/// PILCO's `congp`: an RBF network written as the posterior mean of a GP with N learnable
+/// centres (pseudo-inputs, N×D), pseudo-targets (N×E) and per-output log length-scales, with
+/// σ_f = 1 and σ_n = 1/snr fixed. Its [`Policy::params`] are PILCO's `unwrap` of
+/// `{hyp, inputs, targets}`: `[hyp(:) ((D+2)·E); inputs(:) (N·D); targets(:) (N·E)]`, each
+/// column-major, the fixed `log σ_f`, `log σ_n` entries of `hyp` included (with zero gradient).
 #[derive(Clone, Debug)]
 pub struct RbfPolicy {
     gp: GpModel,
@@ -54,6 +59,7 @@ impl RbfPolicy {
         })
     }
 
+    /// N, the number of basis functions.
     pub fn n_centres(&self) -> usize {
         self.gp.n()
     }
@@ -64,14 +70,18 @@ impl RbfPolicy {
         n * (d + e) + d * e
     }
 
+    /// The centres (PILCO's `inputs`), N×D: row i is the centre of basis function i.
     pub fn centres(&self) -> MatRef<'_, f64> {
         self.gp.inputs()
     }
 
+    /// The pseudo-targets (PILCO's `targets`), N×E, column e for action e.
     pub fn targets(&self) -> MatRef<'_, f64> {
         self.gp.targets()
     }
 
+    /// One [`Hyper`] per action: the learnable `log_ls` (D), and the fixed `log_sf = 0` and
+    /// `log_sn = −ln snr`.
     pub fn hyp(&self) -> &[Hyper] {
         self.gp.hyp()
     }

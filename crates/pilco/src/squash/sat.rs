@@ -91,18 +91,22 @@ impl SineSat {
         })
     }
 
+    /// D, the length of the whole input `x` (not only of the saturated entries).
     pub fn n_inputs(&self) -> usize {
         self.engine.d
     }
 
+    /// I, one output per index.
     pub fn n_outputs(&self) -> usize {
         self.idx.len()
     }
 
+    /// PILCO's `i`, 0-based: output j saturates `x_{indices[j]}`.
     pub fn indices(&self) -> &[usize] {
         &self.idx
     }
 
+    /// PILCO's `e`: output j lies in `[−|e_j|, |e_j|]`.
     pub fn scales(&self) -> &[f64] {
         &self.scale
     }
@@ -132,9 +136,17 @@ impl SineSat {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SatRange {
     /// `u = a_max σ(x) ∈ [−a_max, a_max]`.
-    Symmetric { a_max: f64 },
+    Symmetric {
+        /// Amplitude, `> 0` (checked by [`PartialSat::new`]).
+        a_max: f64,
+    },
     /// `u = (a_max + a_min)/2 + (a_max − a_min)/2 · σ(x) ∈ [a_min, a_max]`, `0 < a_min < a_max`.
-    Bounded { a_min: f64, a_max: f64 },
+    Bounded {
+        /// Lowest output, `> 0` so a gain stays positive (checked by [`PartialSat::new`]).
+        a_min: f64,
+        /// Highest output, `> a_min`.
+        a_max: f64,
+    },
 }
 
 impl SatRange {
@@ -209,14 +221,17 @@ impl PartialSat {
         })
     }
 
+    /// D, the length of the whole input `x`.
     pub fn n_inputs(&self) -> usize {
         self.sat.n_inputs()
     }
 
+    /// I, one output per index.
     pub fn n_outputs(&self) -> usize {
         self.sat.n_outputs()
     }
 
+    /// The range of each output j, in the order of the indices given to [`PartialSat::new`].
     pub fn ranges(&self) -> &[SatRange] {
         &self.ranges
     }
@@ -230,6 +245,8 @@ impl PartialSat {
         u
     }
 
+    /// Exact `M` (I), `S` (I×I), `C` (D×I) of `u` for `x ~ N(m, s)`: those of `gSat` with `e_j`
+    /// the half-width of range j, and `M_j` shifted by the range's centre.
     pub fn forward(&self, m: &[f64], s: MatRef<'_, f64>) -> (Moments, SinesCache) {
         let (mut out, cache) = self.sat.forward(m, s);
         for (mj, c) in out.mean.iter_mut().zip(&self.offset) {
@@ -238,7 +255,8 @@ impl PartialSat {
         (out, cache)
     }
 
-    /// The offsets are constants, so the backward is `gSat`'s with `e = (a_max − a_min)/2`.
+    /// The offsets are constants, so the backward is `gSat`'s with `e_j` the half-width of
+    /// range j: `(a_max − a_min)/2` for a bounded range, `a_max` for a symmetric one.
     pub fn backward(&self, cache: &SinesCache, bar: &MomentsBar) -> GaussianBar {
         self.sat.backward(cache, bar)
     }

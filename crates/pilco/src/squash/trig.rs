@@ -52,6 +52,7 @@ impl TrigAug {
         })
     }
 
+    /// D, the length of the whole input `x`.
     pub fn n_inputs(&self) -> usize {
         self.engine.d
     }
@@ -61,6 +62,7 @@ impl TrigAug {
         2 * self.idx.len()
     }
 
+    /// `gTrig`'s `i`, 0-based: outputs `2j`, `2j+1` are `sin`, `cos` of `x_{indices[j]}`.
     pub fn indices(&self) -> &[usize] {
         &self.idx
     }
@@ -76,11 +78,13 @@ impl TrigAug {
         y
     }
 
+    /// Exact `M` (2I), `S` (2I×2I) and `C` (D×2I) of the interleaved output for `x ~ N(m, s)`.
     pub fn forward(&self, m: &[f64], s: MatRef<'_, f64>) -> (Moments, SinesCache) {
         assert_input("gTrig", self.engine.d, m, s);
         self.engine.forward(m, s)
     }
 
+    /// Adjoints of `(M, S, C)` → adjoints of `(m, s)`; `cache` from this block's `forward`.
     pub fn backward(&self, cache: &SinesCache, bar: &MomentsBar) -> GaussianBar {
         self.engine.backward(cache, bar)
     }
