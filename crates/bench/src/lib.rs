@@ -1,6 +1,8 @@
 //! Fixed benchmark workloads from `../shared/bench` (see its README), so vicpilco's timings
 //! are comparable with other PILCO implementations run on the same numbers.
 
+#![warn(missing_docs)]
+
 use faer::Mat;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};

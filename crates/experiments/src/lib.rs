@@ -20,6 +20,8 @@
 //! Experiments: `pendulum` and `cartpole` (PILCO's swing-ups, [`classic`]), and the thesis's
 //! peg-in-hole runs configured by `experiments/*.toml` ([`config`], [`arm`]).
 
+#![warn(missing_docs)]
+
 pub mod arm;
 pub mod checks;
 pub mod classic;

@@ -8,6 +8,8 @@
 //! Start from [`GpModel`] (exact GP). This crate knows nothing of policies, costs,
 //! environments or the CLI.
 
+#![warn(missing_docs)]
+
 mod error;
 pub mod fastexp;
 pub mod fd;

@@ -10,6 +10,8 @@
 //! * [`replay`]: where another selection rule would have parted from a recorded run;
 //! * [`start`]: start distributions of the real episodes.
 
+#![warn(missing_docs)]
+
 pub mod data;
 pub mod joint;
 pub mod outer;

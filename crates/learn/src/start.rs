@@ -79,7 +79,9 @@ impl StartDistribution {
     }
 }
 
-/// A draw from `N(m, s)` (s may be singular: zero-variance dimensions stay at the mean).
+/// A draw from `N(m, s)`. An all-zero `s` returns `m`; another singular `s` is factorised with
+/// growing diagonal jitter ([`Chol::with_jitter`]), so its zero-variance dimensions get noise of
+/// about the square root of the jitter used.
 pub fn sample_gaussian(m: &[f64], s: &Mat<f64>, seed: u64) -> Result<Vec<f64>, LearnError> {
     let d = m.len();
     // A deterministic start (zero covariance) has no Cholesky factor to draw with.

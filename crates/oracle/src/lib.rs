@@ -3,6 +3,8 @@
 //! directory is loaded, so new cases are picked up without code changes. Kinds with no
 //! checker yet are reported as skipped, never as passed.
 
+#![warn(missing_docs)]
+
 mod case;
 mod compare;
 mod kinds;

@@ -39,6 +39,8 @@
 //! (`vicpilco_gp::fd`) and, for `gSat`, `gTrig`, `lossSat` and `conlin`, against the original
 //! PILCO MATLAB code (`vicpilco-oracle`).
 
+#![warn(missing_docs)]
+
 pub mod cost;
 mod error;
 pub mod policy;

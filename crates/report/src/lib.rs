@@ -17,6 +17,8 @@
 //! [`acceptance_markdown`] reads the summary.json of several runs and tabulates each thesis claim
 //! over the seeds with its acceptance verdict (issue 6).
 
+#![warn(missing_docs)]
+
 mod acceptance;
 mod data;
 mod error;

@@ -106,7 +106,8 @@ pub struct ArmExperiment {
     pub controller: ControllerKind,
     /// Policy updates after the initial roll-out (VIL: Table 5-4, N = 25).
     pub episodes: usize,
-    /// Learning steps H per episode (Table 5-1: 100 × 0.1 s); the return is undiscounted.
+    /// Learning steps H per episode (100: T = 10 s, §5-2-2, at Table 5-1's Δt); the return is
+    /// undiscounted.
     pub horizon: usize,
     /// Length Δt of a learning step (s) (Table 5-1: 0.1); each action is held over one step.
     pub dt: f64,
