@@ -403,10 +403,22 @@ where
             // The optimiser sees q = ψ / scale: J(q) = J(scale ⊙ q), dJ/dq = scale ⊙ dJ/dψ.
             let unscale =
                 |q: &[f64]| -> Vec<f64> { q.iter().zip(&scales).map(|(q, s)| q * s).collect() };
+            // A point the prediction fails at is one the line search backs off from; the
+            // first failure is kept, to name the cause if the start point itself fails.
+            let mut first_failure: Option<LearnError> = None;
             let mut objective = |q: &[f64]| -> Option<(f64, Vec<f64>)> {
                 let p = unscale(q);
-                candidate.set_params(&p).ok()?;
-                let out = self.predicted_value(&candidate, mm, true).ok()?;
+                let evaluated = candidate
+                    .set_params(&p)
+                    .map_err(LearnError::from)
+                    .and_then(|()| self.predicted_value(&candidate, mm, true));
+                let out = match evaluated {
+                    Ok(out) => out,
+                    Err(e) => {
+                        first_failure.get_or_insert(e);
+                        return None;
+                    }
+                };
                 observer.objective(ep, out.j);
                 let grad = out.grad?.iter().zip(&scales).map(|(g, s)| g * s).collect();
                 Some((out.j, grad))
@@ -417,7 +429,11 @@ where
                 .zip(&scales)
                 .map(|(p, s)| p / s)
                 .collect();
-            let j_start = objective(&q0).map_or(f64::NAN, |(j, _)| j);
+            let start = objective(&q0);
+            let j_start = start.as_ref().map_or(f64::NAN, |(j, _)| *j);
+            let start_finite = start
+                .as_ref()
+                .is_some_and(|(j, g)| j.is_finite() && g.iter().all(|v| v.is_finite()));
             let opts = MinimizeOptions {
                 max_iters: self.optimiser.length,
                 grad_tol: 1e-8,
@@ -426,8 +442,18 @@ where
                 max_line_search_evals: Some(self.optimiser.mfepls),
                 wolfe: self.optimiser.wolfe,
             };
-            let result = minimize(&mut objective, q0, &opts).ok_or_else(|| {
-                LearnError::NonFinite("the predicted return at the current policy".into())
+            let result = minimize(&mut objective, q0, &opts);
+            let result = result.ok_or_else(|| match first_failure.take() {
+                Some(cause) => cause,
+                None if start_finite => LearnError::Spec(format!(
+                    "policy optimiser: the line search's Wolfe constants {:?} must satisfy \
+                     0 < c1 < c2 < 1",
+                    self.optimiser.wolfe
+                )),
+                None => LearnError::NonFinite(format!(
+                    "the predicted return ({j_start}) or its gradient at the policy update \
+                     {ep} starts from"
+                )),
             })?;
             self.policy.set_params(&unscale(&result.x))?;
             let optimise_s = t0.elapsed().as_secs_f64();
