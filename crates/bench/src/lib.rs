@@ -33,6 +33,16 @@ pub enum WorkloadError {
         /// `serde_json`'s message (names the field, line and column).
         detail: String,
     },
+    /// A field's size disagrees with the declared sizes, or a value is not finite.
+    #[error("{path}: field `{field}`: {detail}")]
+    Invalid {
+        /// The workload file.
+        path: PathBuf,
+        /// The JSON field at fault.
+        field: &'static str,
+        /// The size expected and found, or the non-finite entry and where it is.
+        detail: String,
+    },
 }
 
 /// Workload W1: a VIL-sized PILCO problem (D = 6 states, U = 2 actions, N = 300, 50 basis
@@ -94,6 +104,17 @@ pub struct W1 {
     pub gamma: f64,
 }
 
+/// The first non-finite entry of a field's values (in row-major order), as `check`'s error.
+fn finite<'a>(
+    field: &'static str,
+    values: impl Iterator<Item = &'a f64>,
+) -> Result<(), (&'static str, String)> {
+    match values.enumerate().find(|(_, v)| !v.is_finite()) {
+        Some((k, v)) => Err((field, format!("entry {k} (row-major) is {v}"))),
+        None => Ok(()),
+    }
+}
+
 /// `../shared/bench` beside the repository (or `VICPILCO_BENCH_DIR`).
 pub fn default_dir() -> PathBuf {
     if let Some(d) = std::env::var_os("VICPILCO_BENCH_DIR") {
@@ -103,7 +124,8 @@ pub fn default_dir() -> PathBuf {
 }
 
 /// A matrix stored as an array of rows (the workload's format); the column count is the first
-/// row's length (0×0 when empty). Panics if a later row is shorter.
+/// row's length (0×0 when empty). Panics if a later row is shorter ([`W1::load`] refuses such
+/// a workload).
 pub fn rows_to_mat(rows: &[Vec<f64>]) -> Mat<f64> {
     let c = rows.first().map_or(0, Vec::len);
     Mat::from_fn(rows.len(), c, |i, j| rows[i][j])
@@ -121,17 +143,104 @@ pub fn hypers(log_ls: &[Vec<f64>], log_sf: &[f64], log_sn: &[f64]) -> Vec<Hyper>
 }
 
 impl W1 {
-    /// Read and deserialise `w1.json`. Sizes are not cross-checked here; inconsistent ones
-    /// fail in [`W1::problem`] or [`W1::dynamics_gp`].
+    /// Read and deserialise `w1.json`, and check every array against the declared sizes
+    /// (`state_dim`, `action_dim`, `n_train`, `n_basis`) and every number for finiteness, so
+    /// that a malformed workload is an error naming its field, never a panic later on.
     pub fn load(path: &Path) -> Result<Self, WorkloadError> {
         let text = std::fs::read_to_string(path).map_err(|e| WorkloadError::Io {
             path: path.to_path_buf(),
             source: e,
         })?;
-        serde_json::from_str(&text).map_err(|e| WorkloadError::Parse {
+        let w1: W1 = serde_json::from_str(&text).map_err(|e| WorkloadError::Parse {
             path: path.to_path_buf(),
             detail: e.to_string(),
-        })
+        })?;
+        w1.check()
+            .map_err(|(field, detail)| WorkloadError::Invalid {
+                path: path.to_path_buf(),
+                field,
+                detail,
+            })?;
+        Ok(w1)
+    }
+
+    /// The first field whose size or values are wrong, and what is wrong with it.
+    fn check(&self) -> Result<(), (&'static str, String)> {
+        let (d, u, n, b) = (self.state_dim, self.action_dim, self.n_train, self.n_basis);
+        let matrices: [(&'static str, &[Vec<f64>], usize, usize); 9] = [
+            ("X", &self.X, n, d + u),
+            ("Y", &self.Y, n, d),
+            ("dyn_log_lengthscales", &self.dyn_log_lengthscales, d + u, d),
+            (
+                "train_init_log_lengthscales",
+                &self.train_init_log_lengthscales,
+                d + u,
+                d,
+            ),
+            ("policy_inputs", &self.policy_inputs, b, d),
+            ("policy_targets", &self.policy_targets, b, u),
+            (
+                "policy_log_lengthscales",
+                &self.policy_log_lengthscales,
+                d,
+                u,
+            ),
+            ("S0", &self.S0, d, d),
+            ("cost_W", &self.cost_W, d, d),
+        ];
+        for (field, rows, n_rows, n_cols) in matrices {
+            let ragged = rows.iter().position(|r| r.len() != n_cols);
+            if rows.len() != n_rows || ragged.is_some() {
+                let got = match ragged {
+                    Some(i) => format!("row {i} has {} entries", rows[i].len()),
+                    None => format!("{} rows", rows.len()),
+                };
+                return Err((field, format!("expected {n_rows}×{n_cols}, got {got}")));
+            }
+            finite(field, rows.iter().flatten())?;
+        }
+        let vectors: [(&'static str, &[f64], usize); 7] = [
+            ("dyn_log_signal_std", &self.dyn_log_signal_std, d),
+            ("dyn_log_noise_std", &self.dyn_log_noise_std, d),
+            (
+                "train_init_log_signal_std",
+                &self.train_init_log_signal_std,
+                d,
+            ),
+            (
+                "train_init_log_noise_std",
+                &self.train_init_log_noise_std,
+                d,
+            ),
+            ("max_action", &self.max_action, u),
+            ("m0", &self.m0, d),
+            ("cost_target", &self.cost_target, d),
+        ];
+        for (field, values, len) in vectors {
+            if values.len() != len {
+                return Err((
+                    field,
+                    format!("expected {len} entries, got {}", values.len()),
+                ));
+            }
+            finite(field, values.iter())?;
+        }
+        if let Some(k) = self.cost_dims.iter().find(|&&k| k >= d) {
+            return Err((
+                "cost_dims",
+                format!("state index {k} is not below state_dim {d}"),
+            ));
+        }
+        let scalars = [
+            ("policy_signal_std", self.policy_signal_std),
+            ("policy_noise_std", self.policy_noise_std),
+            ("cost_width", self.cost_width),
+            ("gamma", self.gamma),
+        ];
+        for (field, v) in scalars {
+            finite(field, [v].iter())?;
+        }
+        Ok(())
     }
 
     /// The dynamics GP with the workload's given hyper-parameters.
