@@ -83,3 +83,27 @@ fn a_malformed_workload_is_refused_naming_the_field() {
         let _ = std::fs::remove_file(path);
     }
 }
+
+/// JSON has no NaN or infinity, and a number beyond the f64 range is refused as it is parsed,
+/// so every number of a loaded workload is finite.
+#[test]
+fn a_number_beyond_the_f64_range_is_a_parse_error() {
+    let Some(workload) = shipped_workload() else {
+        return;
+    };
+    let text = workload
+        .to_string()
+        .replacen("\"gamma\":1.0", "\"gamma\":1e400", 1);
+    assert!(
+        text.contains("1e400"),
+        "the workload's gamma was not written as 1.0"
+    );
+    let path = std::env::temp_dir().join(format!("vicpilco-w1-{}-huge.json", std::process::id()));
+    std::fs::write(&path, text).unwrap();
+    let err = W1::load(&path).expect_err("refused").to_string();
+    let _ = std::fs::remove_file(&path);
+    assert!(
+        err.contains("not a valid workload: number out of range"),
+        "{err}"
+    );
+}

@@ -22,8 +22,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "unknown workload `{}` (known: w1)",
         args.workload
     );
-    let w1 = vicpilco_bench::W1::load(&args.file)
-        .with_context(|| format!("loading {}", args.file.display()))?;
+    let w1 = vicpilco_bench::W1::load(&args.file).context("loading the benchmark workload")?;
     let t = w1.time(args.reps).map_err(|e| anyhow::anyhow!("{e}"))?;
     if args.json {
         println!("{}", serde_json::to_string(&t)?);
