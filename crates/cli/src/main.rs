@@ -73,7 +73,8 @@ enum Command {
     ///
     /// Reads DIR/summary.json of every run (one per experiment and seed), lists per experiment
     /// each claim's measured value and pass/fail per seed, how many seeds pass and the verdict
-    /// under the claim's rule (3 of 5 seeds, or every run). vil-sic's "mean k_y above GIC's" is
+    /// under the claim's rule (3 of 5 seeds, or every run, over seeds 1–5; runs on other seeds
+    /// are shown and counted apart, never in the verdict). vil-sic's "mean k_y above GIC's" is
     /// decided against a vil-gic run of the same seed when one is given.
     Acceptance(acceptance_cmd::Args),
     /// Score a recorded arm run's model choices under every model-selection rule.

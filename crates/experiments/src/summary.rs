@@ -79,7 +79,8 @@ pub struct ThesisCheck {
 pub struct SeedRule {
     /// How many of the runs must pass, at least.
     pub passing: usize,
-    /// Acceptance runs the claim is judged over, one per seed (issue 6: 5).
+    /// Acceptance runs the claim is judged over, one per seed: seeds 1 to `seeds` (issue 6:
+    /// seeds 1–5). Runs on other seeds are shown beside them but not counted.
     pub seeds: usize,
 }
 

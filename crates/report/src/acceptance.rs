@@ -1,5 +1,7 @@
 //! The acceptance table of issue 6: every thesis claim of each experiment, one column per seed,
 //! and whether enough seeds pass it (each claim's `across_seeds` rule, written by the run).
+//! The rule is over seeds 1 to its `seeds` (issue 6: 1–5); runs on further seeds get their
+//! columns, marked "not counted", and a separate count beside the verdict's.
 //!
 //! Only summary.json is read. Claims are matched across runs by their `id` (their text for
 //! summaries written before ids existed). The one claim a run cannot decide alone, vil-sic's
@@ -107,11 +109,25 @@ fn section(
     all: &BTreeMap<String, Vec<RunSummary>>,
 ) {
     let _ = writeln!(h, "## {experiment}\n");
+    let rules: Vec<SeedRule> = runs
+        .iter()
+        .flat_map(|r| r.summary.thesis_reference.iter().flatten())
+        .filter_map(|c| c.across_seeds)
+        .collect();
     for r in runs {
+        let seed = r.summary.seed;
+        let beyond = rules
+            .iter()
+            .find(|rule| !is_acceptance_seed(Some(**rule), seed));
+        let note = beyond.map_or(String::new(), |rule| {
+            format!(
+                " (beyond the acceptance seeds 1–{}: shown, not counted)",
+                rule.seeds
+            )
+        });
         let _ = writeln!(
             h,
-            "- seed {}: `{}`, {} policy updates",
-            r.summary.seed,
+            "- seed {seed}: `{}`, {} policy updates{note}",
             display(&r.dir),
             r.summary.episodes.len()
         );
@@ -141,7 +157,8 @@ fn section(
             .find(|c| claim_key(c) == key)
             .and_then(|c| c.across_seeds);
         let mut cells = vec![cell(&first.claim), rule_text(rule)];
-        let (mut passes, mut fails) = (0, 0);
+        let (mut passes, mut fails, mut counted) = (0, 0, 0);
+        let (mut extra_passes, mut extra) = (0, 0);
         for r in runs {
             let claim = r
                 .summary
@@ -154,15 +171,26 @@ fn section(
                 Some(_) if key == SIC_MEAN_K_Y_ABOVE_GIC => paired_gic_k_y(&r.summary, all),
                 Some(c) => (c.measured.clone(), c.pass),
             };
-            match pass {
-                Some(true) => passes += 1,
-                Some(false) => fails += 1,
-                None => {}
-            }
             let mark = Verdict::of_run(pass).name();
-            cells.push(format!("{} ({mark})", cell(&measured)));
+            if is_acceptance_seed(rule, r.summary.seed) {
+                counted += 1;
+                match pass {
+                    Some(true) => passes += 1,
+                    Some(false) => fails += 1,
+                    None => {}
+                }
+                cells.push(format!("{} ({mark})", cell(&measured)));
+            } else {
+                extra += 1;
+                extra_passes += u64::from(pass == Some(true));
+                cells.push(format!("{} ({mark}, not counted)", cell(&measured)));
+            }
         }
-        cells.push(format!("{passes} of {}", runs.len()));
+        let mut passing = format!("{passes} of {counted}");
+        if extra > 0 {
+            let _ = write!(passing, "; {extra_passes} of {extra} other seeds");
+        }
+        cells.push(passing);
         cells.push(rule.map_or("– (rule not recorded)".into(), |rule| {
             verdict(rule, passes, fails).name().into()
         }));
@@ -278,6 +306,14 @@ fn complete(s: &Summary) -> bool {
         .any(|c| claim_key(c) == FINAL_BELOW_INITIAL && c.pass.is_some())
 }
 
+/// Whether a run of `seed` counts towards `rule`: issue 6 judges its claims on seeds 1 to
+/// `rule.seeds`, so a run on another seed is evidence shown beside them, never a vote (seven
+/// seeds must not pass a "3 of 5" rule that seeds 1–5 fail). Without a recorded rule every run
+/// counts, as before the rules existed.
+fn is_acceptance_seed(rule: Option<SeedRule>, seed: u64) -> bool {
+    rule.is_none_or(|r| (1..=r.seeds).contains(&seed))
+}
+
 /// "3 of 5 seeds", "every run (5 seeds)", or a dash for summaries that predate the rules.
 pub(crate) fn rule_text(rule: Option<SeedRule>) -> String {
     match rule {
@@ -292,263 +328,4 @@ fn display(p: &Path) -> String {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::synthetic::TempDir;
-    use serde_json::{json, Value};
-
-    const THREE_OF_FIVE: SeedRule = SeedRule {
-        passing: 3,
-        seeds: 5,
-    };
-    const EVERY_RUN: SeedRule = SeedRule {
-        passing: 5,
-        seeds: 5,
-    };
-
-    #[test]
-    fn verdicts_follow_the_seed_rules() {
-        assert_eq!(verdict(THREE_OF_FIVE, 3, 0), Verdict::Pass);
-        assert_eq!(verdict(THREE_OF_FIVE, 3, 2), Verdict::Pass);
-        assert_eq!(verdict(THREE_OF_FIVE, 2, 2), Verdict::Undecided);
-        assert_eq!(verdict(THREE_OF_FIVE, 2, 3), Verdict::Fail);
-        assert_eq!(verdict(THREE_OF_FIVE, 0, 0), Verdict::Undecided);
-        assert_eq!(verdict(EVERY_RUN, 4, 0), Verdict::Undecided);
-        assert_eq!(verdict(EVERY_RUN, 4, 1), Verdict::Fail);
-        assert_eq!(verdict(EVERY_RUN, 5, 0), Verdict::Pass);
-    }
-
-    fn claim(id: &str, text: &str, measured: &str, pass: Option<bool>, every: bool) -> Value {
-        let seeds = 5;
-        let passing = if every { 5 } else { 3 };
-        json!({"id": id, "claim": text, "thesis": "t", "measured": measured, "pass": pass,
-               "across_seeds": {"passing": passing, "seeds": seeds}})
-    }
-
-    fn write_summary(
-        root: &Path,
-        name: &str,
-        experiment: &str,
-        seed: u64,
-        k_y: f64,
-        claims: Vec<Value>,
-    ) -> PathBuf {
-        let dir = root.join(name);
-        std::fs::create_dir_all(&dir).unwrap();
-        let summary = json!({"experiment": experiment, "seed": seed, "episodes": [],
-                             "final_mean_gains": [150.0, k_y], "thesis_reference": claims});
-        std::fs::write(dir.join("summary.json"), summary.to_string()).unwrap();
-        dir
-    }
-
-    fn sic_claims(final_return: f64) -> Vec<Value> {
-        vec![
-            claim(
-                "sic_final_return",
-                "final return <= 90",
-                &format!("{final_return:.1}"),
-                Some(final_return <= 90.0),
-                false,
-            ),
-            claim(
-                SIC_MEAN_K_Y_ABOVE_GIC,
-                "mean k_y above GIC's",
-                "n/a",
-                None,
-                false,
-            ),
-            finished(true),
-        ]
-    }
-
-    /// The every-VIL-run claim, decided (`done`) only once a run has all its planned updates.
-    fn finished(done: bool) -> Value {
-        let pass = done.then_some(true);
-        claim(FINAL_BELOW_INITIAL, "final below initial", "x", pass, true)
-    }
-
-    /// The table row whose first cell is `claim`, split into its cells.
-    fn row_of(md: &str, claim: &str) -> Vec<String> {
-        let line = md
-            .lines()
-            .find(|l| l.starts_with(&format!("| {claim} |")))
-            .unwrap_or_else(|| panic!("no row {claim} in\n{md}"));
-        line.trim_matches('|')
-            .split(" | ")
-            .map(|c| c.trim().to_string())
-            .collect()
-    }
-
-    #[test]
-    fn table_counts_seeds_and_pairs_sic_with_the_same_seeds_gic_run() {
-        let tmp = TempDir::new("acceptance");
-        let root = tmp.path();
-        let dirs = vec![
-            write_summary(root, "sic3", "vil-sic", 3, 240.0, sic_claims(95.0)),
-            write_summary(root, "sic1", "vil-sic", 1, 270.0, sic_claims(72.5)),
-            write_summary(root, "sic2", "vil-sic", 2, 120.0, sic_claims(80.0)),
-            write_summary(root, "sic4", "vil-sic", 4, 240.0, sic_claims(70.0)),
-            // Seed 1 has two GIC runs: rbf10 is the comparison, not rbf25.
-            write_summary(
-                root,
-                "rbf25-1",
-                "vil-gic-rbf25",
-                1,
-                300.0,
-                vec![finished(true)],
-            ),
-            write_summary(
-                root,
-                "rbf10-1",
-                "vil-gic-rbf10",
-                1,
-                200.0,
-                vec![finished(true)],
-            ),
-            write_summary(
-                root,
-                "rbf25-2",
-                "vil-gic-rbf25",
-                2,
-                130.0,
-                vec![finished(true)],
-            ),
-            // Seed 2 also has a linear-policy GIC run: RBF N_c = 25 is nearer to SIC's policy.
-            write_summary(root, "lin-2", "vil-gic-lin", 2, 50.0, vec![finished(true)]),
-            // A run from before the claims were recorded.
-            write_summary(root, "lin-1", "vil-gic-lin", 1, 50.0, vec![]),
-            // Seed 4's GIC run was stopped early: its last gains are not its final ones.
-            write_summary(
-                root,
-                "rbf10-4",
-                "vil-gic-rbf10",
-                4,
-                100.0,
-                vec![finished(false)],
-            ),
-        ];
-        let md = acceptance_markdown(&dirs).unwrap();
-        assert!(md.contains("## vil-sic"), "{md}");
-        assert!(md
-            .contains("| claim | needs | seed 1 | seed 2 | seed 3 | seed 4 | passing | verdict |"));
-        assert_eq!(
-            row_of(&md, "final return <= 90"),
-            [
-                "final return <= 90",
-                "3 of 5 seeds",
-                "72.5 (pass)",
-                "80.0 (pass)",
-                "95.0 (fail)",
-                "70.0 (pass)",
-                "3 of 4",
-                "pass"
-            ]
-        );
-        assert_eq!(
-            row_of(&md, "mean k_y above GIC's"),
-            [
-                "mean k_y above GIC's",
-                "3 of 5 seeds",
-                "270 vs 200 N/m (vil-gic-rbf10 seed 1) (pass)",
-                "120 vs 130 N/m (vil-gic-rbf25 seed 2) (fail)",
-                "240 N/m; no vil-gic run of seed 3, the 4 complete ones: 50 (vil-gic-lin seed 2) to 300 (vil-gic-rbf25 seed 1) (undecided)",
-                "240 vs 100 N/m (vil-gic-rbf10 seed 4); GIC run stopped at update 0 (undecided)",
-                "1 of 4",
-                "undecided"
-            ]
-        );
-        let sic_section = &md[md.find("## vil-sic").unwrap()..];
-        let every = row_of(sic_section, "final below initial");
-        assert_eq!(every[1], "every run (5 seeds)");
-        assert_eq!(every[6..], ["4 of 4", "undecided"]);
-        // The stopped GIC run counts as neither pass nor fail.
-        let gic = row_of(
-            &md[md.find("## vil-gic-rbf10").unwrap()..],
-            "final below initial",
-        );
-        assert_eq!(
-            gic[2..],
-            ["x (pass)", "x (undecided)", "1 of 2", "undecided"]
-        );
-    }
-
-    #[test]
-    fn without_its_seeds_gic_run_sic_must_beat_every_complete_one() {
-        let tmp = TempDir::new("acceptance-unpaired");
-        let root = tmp.path();
-        let gic = |name: &str, seed: u64, k_y: f64, done: bool| {
-            write_summary(root, name, "vil-gic-rbf10", seed, k_y, vec![finished(done)])
-        };
-        let dirs = vec![
-            write_summary(root, "sic1", "vil-sic", 1, 185.0, sic_claims(60.0)),
-            write_summary(root, "sic2", "vil-sic", 2, 50.0, sic_claims(60.0)),
-            write_summary(root, "sic3", "vil-sic", 3, 5.0, sic_claims(60.0)),
-            gic("gic4", 4, 132.5, true),
-            gic("gic5", 5, 7.1, true),
-            // A stopped run's gains are not its final ones: not a comparison.
-            gic("gic6", 6, 400.0, false),
-        ];
-        let md = acceptance_markdown(&dirs).unwrap();
-        let cells = row_of(&md, "mean k_y above GIC's");
-        let range = "the 2 complete ones: 7 (vil-gic-rbf10 seed 5) to 132 (vil-gic-rbf10 seed 4)";
-        assert_eq!(
-            cells[2..],
-            [
-                format!("185 N/m; no vil-gic run of seed 1, {range} (pass)"),
-                format!("50 N/m; no vil-gic run of seed 2, {range} (undecided)"),
-                format!("5 N/m; no vil-gic run of seed 3, {range} (fail)"),
-                "1 of 3".to_string(),
-                "undecided".to_string(),
-            ]
-        );
-    }
-
-    #[test]
-    fn an_impossible_seed_rule_is_an_error_naming_the_field() {
-        let tmp = TempDir::new("acceptance-rule");
-        let mut bad = claim("x", "x", "1", Some(true), false);
-        bad["across_seeds"]["passing"] = json!(6);
-        let dir = write_summary(tmp.path(), "a", "vil-sic", 1, 1.0, vec![bad]);
-        let err = acceptance_markdown(&[dir]).unwrap_err();
-        assert!(matches!(err, ReportError::Malformed { .. }), "{err}");
-        assert!(err.to_string().contains("across_seeds"), "{err}");
-    }
-
-    #[test]
-    fn two_runs_of_one_seed_are_refused() {
-        let tmp = TempDir::new("acceptance-dup");
-        let a = write_summary(tmp.path(), "a", "vil-sic", 1, 1.0, vec![]);
-        let b = write_summary(tmp.path(), "b", "vil-sic", 1, 1.0, vec![]);
-        let err = acceptance_markdown(&[a, b]).unwrap_err();
-        assert!(
-            matches!(err, ReportError::DuplicateSeed { seed: 1, .. }),
-            "{err}"
-        );
-        assert!(err.to_string().contains("vil-sic seed 1"), "{err}");
-    }
-
-    #[test]
-    fn old_summaries_match_by_text_and_leave_the_verdict_open() {
-        let tmp = TempDir::new("acceptance-old");
-        let old = vec![
-            json!({"claim": "every roll-out of updates 6-10 inserts", "thesis": "t",
-                              "measured": "5/5", "pass": true}),
-        ];
-        let dirs: Vec<PathBuf> = (1..=3)
-            .map(|s| {
-                write_summary(
-                    tmp.path(),
-                    &format!("r{s}"),
-                    "vil-gic-rbf10",
-                    s,
-                    1.0,
-                    old.clone(),
-                )
-            })
-            .collect();
-        let md = acceptance_markdown(&dirs).unwrap();
-        let row = row_of(&md, "every roll-out of updates 6-10 inserts");
-        assert_eq!(row[1], "–");
-        assert_eq!(row[5..], ["3 of 3", "– (rule not recorded)"]);
-    }
-}
+mod tests;

@@ -82,7 +82,7 @@ pub(crate) struct Claim {
     pub thesis: String,
     pub measured: String,
     pub pass: Option<bool>,
-    /// Acceptance rule: at least `passing` of `seeds` runs pass the claim.
+    /// Acceptance rule: at least `passing` of the runs on seeds 1 to `seeds` pass the claim.
     pub across_seeds: Option<SeedRule>,
 }
 
