@@ -33,14 +33,16 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run a learning experiment: PILCO's pendulum or cart-pole swing-up, or the thesis's
-    /// VIL peg-in-hole task with GIC (vil-gic).
+    /// Run a learning experiment: PILCO's pendulum or cart-pole swing-up, or one of the
+    /// thesis's peg-in-hole experiments (VIL with GIC or SIC, VILTA).
     ///
     /// Random initial roll-out(s), then per policy update: train the GP dynamics model, optimise
-    /// the policy on the predicted return, roll it out. Writes DIR/summary.json (per update:
-    /// predicted and recorded return, success, interaction/training/optimisation time;
-    /// solved_at_episode), DIR/rollouts.jsonl (every roll-out, appended as recorded) and
-    /// DIR/policy.json (final policy and dynamics hyper-parameters).
+    /// the policy on the predicted return, roll it out. Keeps DIR current after every update:
+    /// summary.json (per update: predicted and recorded return, success, interaction, training
+    /// and optimisation time; the thesis's numbers beside the run's), rollouts.jsonl,
+    /// predictions.jsonl and policies.jsonl (every roll-out, long-term prediction and policy,
+    /// appended as recorded), checkpoint.json (for --resume), policy.json (final policy and
+    /// dynamics hyper-parameters), and the plots, report.html and report.md.
     Run(run_cmd::Args),
     /// Check vicpilco's maths against reference values from the original PILCO MATLAB code.
     ///

@@ -11,7 +11,8 @@ pub struct Args {
     /// Master seed: the same seed reproduces the run.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Run directory (summary.json, rollouts.jsonl, policy.json); default runs/<name>-seed<S>.
+    /// Run directory (summary.json, the JSON-lines records, checkpoint, policy, report);
+    /// default runs/<name>-seed<S>.
     #[arg(long)]
     out: Option<PathBuf>,
     /// Number of policy updates (default: the experiment's).
