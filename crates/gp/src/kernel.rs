@@ -75,9 +75,6 @@ impl Hyper {
 
 /// A stationary covariance function with ARD length-scales and a signal variance.
 pub trait Kernel: Send + Sync + std::fmt::Debug {
-    /// Short stable identifier of the kernel, e.g. `"squared-exponential-ard"`.
-    fn name(&self) -> &'static str;
-
     /// `k(a, b)` (no noise).
     fn eval(&self, h: &Hyper, a: &[f64], b: &[f64]) -> f64;
 
@@ -124,10 +121,6 @@ pub trait Kernel: Send + Sync + std::fmt::Debug {
 pub struct SquaredExponential;
 
 impl Kernel for SquaredExponential {
-    fn name(&self) -> &'static str {
-        "squared-exponential-ard"
-    }
-
     fn eval(&self, h: &Hyper, a: &[f64], b: &[f64]) -> f64 {
         let mut q = 0.0;
         for ((ai, bi), l) in a.iter().zip(b).zip(&h.log_ls) {

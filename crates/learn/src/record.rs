@@ -28,7 +28,9 @@ pub trait LoopObserver {
     /// `phase` of policy update `episode` begins (episode 0: the initial roll-outs).
     fn phase(&mut self, _episode: usize, _phase: Phase) {}
     /// Each evaluation of the objective `j` (J, exploration term included) while update
-    /// `episode` optimises its policy, line-search trial points included.
+    /// `episode` optimises its policy, line-search trial points included. A point whose
+    /// prediction fails has no J and is not reported: the line search backs off from it (if
+    /// the start point fails, the update fails with that cause).
     fn objective(&mut self, _episode: usize, _j: f64) {}
     /// Update `record.index` is finished: optimised, rolled out and recorded (before its
     /// [`LoopObserver::checkpoint`]).

@@ -154,11 +154,6 @@ impl Case {
         }
     }
 
-    /// Whether the object (the nested one, for a sub-case) has the key `name`.
-    pub fn has(&self, name: &str) -> bool {
-        self.fields.contains_key(name)
-    }
-
     /// Field `name` of any rank: nested arrays (first index outermost) flattened row-major, a
     /// bare number as rank 0. Fails when the field is missing, ragged or not numeric.
     pub fn tensor(&self, name: &str) -> Result<Tensor, OracleError> {
