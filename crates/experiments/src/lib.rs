@@ -19,6 +19,32 @@
 //!
 //! Experiments: `pendulum` and `cartpole` (PILCO's swing-ups, [`classic`]), and the thesis's
 //! peg-in-hole runs configured by `experiments/*.toml` ([`config`], [`arm`]).
+//!
+//! ## Example
+//!
+//! The shipped configs are compiled in. `vil-gic` is an alias of `vil-gic-rbf10`: an RBF policy
+//! of 10 centres on (x, y, ẋ, ẏ) with two gains, n_ψ = N_c (n_π + m) + n_π m = 68, and a
+//! dynamics GP on those four, time and the two gains (D = 7); VILTA's has 50 centres and four
+//! actions (n_ψ = 416) and no time (D = 8). A key the schema does not know is an error that
+//! names it:
+//!
+//! ```
+//! use vicpilco_experiments::config::{parse, shipped};
+//!
+//! let (label, text) = shipped("vil-gic").expect("a shipped name");
+//! assert_eq!(label, "vil-gic-rbf10");
+//! let vil = parse(text, label)?;
+//! assert_eq!((vil.n_params(), vil.gp_input_dim(), vil.horizon), (68, 7, 100));
+//!
+//! let (label, text) = shipped("vilta").expect("a shipped name");
+//! let vilta = parse(text, label)?;
+//! assert_eq!((vilta.n_params(), vilta.gp_input_dim(), vilta.n_actions()), (416, 8, 4));
+//!
+//! let misspelt = text.replace("[gp]", "[gp]\nlenghtscale_ceiling = 0.02");
+//! let err = parse(&misspelt, "mine.toml").unwrap_err().to_string();
+//! assert!(err.contains("mine.toml") && err.contains("lenghtscale_ceiling"), "{err}");
+//! # Ok::<(), vicpilco_experiments::config::ConfigError>(())
+//! ```
 
 #![warn(missing_docs)]
 

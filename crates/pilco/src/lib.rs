@@ -38,6 +38,52 @@
 //! Every derivative here is checked against central finite differences
 //! (`vicpilco_gp::fd`) and, for `gSat`, `gTrig`, `lossSat` and `conlin`, against the original
 //! PILCO MATLAB code (`vicpilco-oracle`).
+//!
+//! ## Example
+//!
+//! Squash a policy's two raw outputs, a stiffness onto `[5, 250]` N/m and a reference
+//! increment onto `±2.5` mm, for an uncertain raw output `x ~ N(m, s)`; check the stiffness's
+//! mean against a quadrature of the deterministic map, and its derivative with respect to
+//! `m₀` from the backward pass against a central difference of the forward pass:
+//!
+//! ```
+//! use faer::Mat;
+//! use vicpilco_pilco::squash::{PartialSat, SatRange};
+//! use vicpilco_pilco::MomentsBar;
+//!
+//! let ranges = [
+//!     SatRange::Bounded { a_min: 5.0, a_max: 250.0 },
+//!     SatRange::Symmetric { a_max: 0.0025 },
+//! ];
+//! let sat = PartialSat::new(2, &[0, 1], &ranges)?;
+//! let (m, sd) = ([0.4, -0.2], [0.3, 0.1]);
+//! let s = Mat::from_fn(2, 2, |i, j| if i == j { sd[i] * sd[i] } else { 0.0 });
+//! let (out, cache) = sat.forward(&m, s.as_ref());
+//!
+//! // E[k] by the midpoint rule over ±8 standard deviations of x₀.
+//! let steps = 4000;
+//! let width = 16.0 * sd[0] / steps as f64;
+//! let quadrature: f64 = (0..steps)
+//!     .map(|i| {
+//!         let z = -8.0 + 16.0 * (i as f64 + 0.5) / steps as f64;
+//!         let density = (-0.5 * z * z).exp() / (sd[0] * (2.0 * std::f64::consts::PI).sqrt());
+//!         sat.apply(&[m[0] + sd[0] * z, m[1]])[0] * density * width
+//!     })
+//!     .sum();
+//! assert!((out.mean[0] - quadrature).abs() < 1e-9 * 250.0);
+//! assert!(out.mean[0] > 5.0 && out.mean[0] < 250.0);
+//!
+//! // Reverse mode: the adjoint of E[k] alone gives ∂E[k]/∂m.
+//! let mut bar = MomentsBar::zeros(2);
+//! bar.mean[0] = 1.0;
+//! let grad = sat.backward(&cache, &bar);
+//! let h = 1e-6;
+//! let mean_k_at = |m0: f64| sat.forward(&[m0, m[1]], s.as_ref()).0.mean[0];
+//! let central = (mean_k_at(m[0] + h) - mean_k_at(m[0] - h)) / (2.0 * h);
+//! assert!((grad.mean[0] - central).abs() < 1e-6 * central.abs());
+//! assert_eq!(grad.mean[1], 0.0);
+//! # Ok::<(), vicpilco_pilco::PilcoError>(())
+//! ```
 
 #![warn(missing_docs)]
 

@@ -438,7 +438,8 @@ impl FinalPolicy {
     }
 }
 
-/// The config text and file label of a shipped name (aliases resolved).
+/// `(label, text)` of a shipped config: its name (an alias resolved to the name it stands for)
+/// and its TOML text.
 pub fn shipped(name: &str) -> Option<(&'static str, &'static str)> {
     let name = ALIASES
         .iter()
