@@ -61,8 +61,7 @@ fn step_moments_match_monte_carlo_for_every_kind_of_target() {
         .map(|k| vec![0.02 * k as f64, -0.01, 0.005 * k as f64])
         .collect();
 
-    // A GP on (x0, x2, time, u0, u1) with smooth, clearly nonlinear outputs, and a model
-    // uncertainty that is not negligible next to its mean's spread.
+    // A GP on (x0, x2, time, u0, u1) with smooth, clearly nonlinear outputs.
     let gp_dim = spec.dyn_inputs.len() + actions;
     let n = 30;
     let x_train = Mat::from_fn(n, gp_dim, |_, _| normal(&mut rng));
