@@ -31,13 +31,17 @@ const DXD: usize = 2;
 /// Where x, ẋ, t (when a GP input) and k_x sit among the GP inputs: the state entries listed
 /// in `spec.dyn_inputs`, then the actions.
 fn shown_inputs(spec: &StepSpec) -> Vec<(usize, &'static str)> {
-    let mut shown: Vec<(usize, &'static str)> = [(0, "l_x"), (2, "l_xd"), (arm::TIME_INDEX, "l_t")]
-        .into_iter()
-        .filter_map(|(entry, name)| {
-            let at = spec.dyn_inputs.iter().position(|&i| i == entry)?;
-            Some((at, name))
-        })
-        .collect();
+    // Time follows the state (and any angles' sine and cosine) in the augmented vector.
+    let time = spec.time_input.then(|| spec.augmented_dim() - 1);
+    let mut shown: Vec<(usize, &'static str)> =
+        [(Some(0), "l_x"), (Some(2), "l_xd"), (time, "l_t")]
+            .into_iter()
+            .filter_map(|(entry, name)| {
+                let entry = entry?;
+                let at = spec.dyn_inputs.iter().position(|&i| i == entry)?;
+                Some((at, name))
+            })
+            .collect();
     shown.push((spec.dyn_inputs.len(), "l_kx"));
     shown
 }

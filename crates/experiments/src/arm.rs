@@ -37,9 +37,6 @@ pub const PURPOSE_EVALUATION: u64 = 12;
 /// Seed purpose of the initial scan's jitter, derived from the explore seed.
 const PURPOSE_SCAN_JITTER: u64 = 13;
 
-/// Index of the time entry in the augmented state (x, y, ẋ, ẏ, f_x, f_y, t); with
-/// `vilta.lead_state` the lead comes before t, which is then at `cfg.state_dim()`.
-pub const TIME_INDEX: usize = 6;
 /// Indices of the reference's lead (x_v − x, y_v − y) in the state with `vilta.lead_state`.
 pub const LEAD_INDICES: [usize; 2] = [6, 7];
 /// Indices of f_x, f_y in the arm's state (x, y, ẋ, ẏ, f_x, f_y).
