@@ -10,13 +10,14 @@
 //! step here mixes every kind of next-state entry the experiments use: relative and absolute
 //! targets, linear prior terms (the lead's force prior) and a known prior-mean shift (the
 //! reference's increment, thesis §4-1-2), with time among the policy's and the GP's inputs.
+//! It runs through the full GP and through a FITC model (PILCO's `gp0` and `gp1`).
 
 use faer::Mat;
 use rand::{RngExt, SeedableRng};
 use rand_distr::StandardNormal;
 use vicpilco_gp::linalg::Chol;
 use vicpilco_gp::moments::MmModel;
-use vicpilco_gp::{GpModel, Hyper};
+use vicpilco_gp::{GpModel, Hyper, SparseGpModel};
 use vicpilco_learn::step::{LinearPrior, Predictor, StepSpec, Target};
 use vicpilco_pilco::policy::{LinearPolicy, Policy};
 
@@ -33,6 +34,22 @@ fn normal(rng: &mut Rng) -> f64 {
 
 #[test]
 fn step_moments_match_monte_carlo_for_every_kind_of_target() {
+    check_step_against_monte_carlo(Dynamics::Full);
+}
+
+/// The same through a FITC model on 12 inducing inputs (the VIL runs' model above 300 points).
+#[test]
+fn sparse_step_moments_match_monte_carlo() {
+    check_step_against_monte_carlo(Dynamics::Sparse);
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Dynamics {
+    Full,
+    Sparse,
+}
+
+fn check_step_against_monte_carlo(kind: Dynamics) {
     let mut rng = Rng::seed_from_u64(7);
     let (d0, actions, dt, t) = (3, 2, 0.1, 4);
     let spec = StepSpec {
@@ -76,21 +93,25 @@ fn step_moments_match_monte_carlo_for_every_kind_of_target() {
             log_sn: -3.0,
         })
         .collect();
-    let gp = GpModel::new(x_train, y_train, hyp).unwrap();
+    let inducing = Mat::from_fn(12, gp_dim, |i, j| x_train[(i, j)]);
+    let sparse =
+        SparseGpModel::new(x_train.as_ref(), y_train.as_ref(), hyp.clone(), inducing).unwrap();
+    let full = GpModel::new(x_train, y_train, hyp).unwrap();
+    let dynamics = || match kind {
+        Dynamics::Full => MmModel::with_uncertainty(&full),
+        Dynamics::Sparse => MmModel::sparse(&sparse),
+    };
+    let predict = |input: &[f64]| match kind {
+        Dynamics::Full => full.predict(input),
+        Dynamics::Sparse => sparse.predict(input),
+    };
 
     let w = Mat::from_fn(actions, spec.policy_inputs.len(), |_, _| {
         0.6 * normal(&mut rng)
     });
     let b = [0.3, -0.2];
     let policy = LinearPolicy::new(w.as_ref(), &b).unwrap();
-    let predictor = Predictor::new(
-        &spec,
-        &policy,
-        None,
-        MmModel::with_uncertainty(&gp),
-        Some(&shift),
-    )
-    .unwrap();
+    let predictor = Predictor::new(&spec, &policy, None, dynamics(), Some(&shift)).unwrap();
 
     let m = vec![0.2, -0.4, 0.1];
     let root = Mat::from_fn(d0, d0, |i, j| 0.3 * ((i + 2 * j) % 3) as f64 - 0.2);
@@ -113,7 +134,7 @@ fn step_moments_match_monte_carlo_for_every_kind_of_target() {
         let u = policy.action(&pick(&spec.policy_inputs));
         let mut gp_input = pick(&spec.dyn_inputs);
         gp_input.extend(&u);
-        let (mean, var) = gp.predict(&gp_input);
+        let (mean, var) = predict(&gp_input);
         let x_next: Vec<f64> = (0..d0)
             .map(|k| {
                 let y = mean[k] + var[k].sqrt() * normal(&mut rng);
@@ -152,7 +173,7 @@ fn step_moments_match_monte_carlo_for_every_kind_of_target() {
             mutant,
             &policy,
             None,
-            MmModel::with_uncertainty(&gp),
+            dynamics(),
             shifted.then_some(shift.as_slice()),
         )
         .unwrap();
