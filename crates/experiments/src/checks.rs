@@ -186,6 +186,16 @@ fn mean_return(s: &Summary, from: usize, to: usize) -> Option<f64> {
         .then(|| eps.iter().map(|e| e.recorded_return).sum::<f64>() / eps.len() as f64)
 }
 
+/// What a run shows for an event that has not happened: "never" once the run is complete, and
+/// how far it has got otherwise, since a partial run may still see it.
+fn none_so_far(complete: bool, updates: usize) -> String {
+    if complete {
+        "never".into()
+    } else {
+        format!("not yet ({updates} updates)")
+    }
+}
+
 fn fmt_opt(v: Option<f64>) -> String {
     v.map_or("n.a.".into(), |v| format!("{v:.1}"))
 }
@@ -343,7 +353,7 @@ pub fn thesis_checks(
             "vilta_first_insertion",
             "first insertion within 12 policy updates",
             "hole found at update 3",
-            first.map_or("never".into(), |f| format!("update {f}")),
+            first.map_or(none_so_far(full, n), |f| format!("update {f}")),
             first.map_or((n >= 12).then_some(false), |f| Some(f <= 12)),
         ));
         let after = first.and_then(|f| {
@@ -359,7 +369,7 @@ pub fn thesis_checks(
             "vilta_three_after_first",
             "3 consecutive inserting updates after the first insertion",
             "lost at 4, consistent from update 11",
-            after.map_or("not yet".into(), |a| format!("from update {a}")),
+            after.map_or(none_so_far(full, n), |a| format!("from update {a}")),
             after.map(|_| true).or(full.then_some(false)),
         ));
         out.push(check(

@@ -111,6 +111,74 @@ fn linear_policy_needs_five_inserting_updates_in_a_row_by_update_20() {
 }
 
 #[test]
+fn vilta_needs_an_early_insertion_three_more_in_a_row_and_a_low_final_return() {
+    let c = cfg("vilta");
+    let run = |returns: &[(f64, bool)]| thesis_checks("vilta", &c, 20, &summary(returns));
+    let row = |checks: &[ThesisCheck], id: &str| {
+        let r = checks.iter().find(|c| c.id == id).unwrap();
+        (r.measured.clone(), r.pass)
+    };
+    // The thesis's course: found at 3, lost at 4, consistent from 5, final 20.
+    let thesis: Vec<_> = (1..=20)
+        .map(|i| (if i >= 5 { 20.0 } else { 60.0 }, i == 3 || i >= 5))
+        .collect();
+    let checks = run(&thesis);
+    assert_eq!(
+        row(&checks, "vilta_first_insertion"),
+        ("update 3".into(), Some(true))
+    );
+    assert_eq!(
+        row(&checks, "vilta_three_after_first"),
+        ("from update 5".into(), Some(true))
+    );
+    assert_eq!(
+        row(&checks, "vilta_final_return"),
+        ("20.0".into(), Some(true))
+    );
+
+    // Complete and never inserting: every part fails, and says "never", not "not yet".
+    let never = run(&[(100.0, false); 20]);
+    assert_eq!(
+        row(&never, "vilta_first_insertion"),
+        ("never".into(), Some(false))
+    );
+    assert_eq!(
+        row(&never, "vilta_three_after_first"),
+        ("never".into(), Some(false))
+    );
+    assert_eq!(row(&never, "vilta_final_return").1, Some(false));
+
+    // Inserting late, or only once, fails; a final return of 25.01 fails.
+    let late: Vec<_> = (1..=20).map(|i| (20.0, i >= 13)).collect();
+    assert_eq!(row(&run(&late), "vilta_first_insertion").1, Some(false));
+    let once: Vec<_> = (1..=20).map(|i| (20.0, i == 2)).collect();
+    assert_eq!(
+        row(&run(&once), "vilta_three_after_first"),
+        ("never".into(), Some(false))
+    );
+    let mut close = thesis.clone();
+    close[19].0 = 25.01;
+    assert_eq!(row(&run(&close), "vilta_final_return").1, Some(false));
+
+    // Stopped part-way: undecided until 12 updates have passed without an insertion.
+    let partial = run(&[(100.0, false); 8]);
+    assert_eq!(
+        row(&partial, "vilta_first_insertion"),
+        ("not yet (8 updates)".into(), None)
+    );
+    assert_eq!(
+        row(&partial, "vilta_three_after_first"),
+        ("not yet (8 updates)".into(), None)
+    );
+    assert_eq!(row(&partial, "vilta_final_return").1, None);
+    let stalled = run(&[(100.0, false); 12]);
+    assert_eq!(
+        row(&stalled, "vilta_first_insertion"),
+        ("not yet (12 updates)".into(), Some(false))
+    );
+}
+
+#[test]
 fn gain_means_cover_the_windows_and_the_whole_episode() {
     // k_x = 10 t, k_y = 100 − t/2 over t = 0..99 (steps of 0.1 s: 20 steps per 2 s window).
     let actions: Vec<Vec<f64>> = (0..100)
