@@ -11,6 +11,7 @@ mod bench_cmd;
 mod doc_commands;
 mod evaluate_cmd;
 mod oracle_cmd;
+mod recheck_cmd;
 mod recorded;
 mod report_cmd;
 mod rescore_cmd;
@@ -96,6 +97,15 @@ enum Command {
     /// (each start's y, success, return, end position, largest force) and prints how many
     /// starts insert per update.
     Evaluate(evaluate_cmd::Args),
+    /// Judge recorded arm runs' thesis claims again with this build's checks.
+    ///
+    /// A summary keeps the claims as judged when its run ended; after a check's rule or
+    /// wording changes, stored runs keep the old judgement, which `acceptance` tables. This
+    /// judges each run again from its summary's per-update records and final evaluation
+    /// (nothing is rolled out or refitted), after checking that the settings given are the
+    /// run's, and rewrites only `thesis_reference` (and the report, in a full run directory).
+    /// Prints each claim that changes.
+    Recheck(recheck_cmd::Args),
 }
 
 fn main() -> ExitCode {
@@ -116,6 +126,7 @@ fn main() -> ExitCode {
         Command::Acceptance(args) => acceptance_cmd::run(args).map(|()| ExitCode::SUCCESS),
         Command::Rescore(args) => rescore_cmd::run(args).map(|()| ExitCode::SUCCESS),
         Command::Evaluate(args) => evaluate_cmd::run(args).map(|()| ExitCode::SUCCESS),
+        Command::Recheck(args) => recheck_cmd::run(args).map(|()| ExitCode::SUCCESS),
     };
     match result {
         Ok(code) => code,

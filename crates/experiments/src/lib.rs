@@ -53,6 +53,7 @@ pub mod checks;
 pub mod classic;
 pub mod config;
 pub mod evaluate;
+pub mod recheck;
 pub mod record;
 pub mod replay;
 pub mod subnormals;
@@ -69,7 +70,7 @@ use vicpilco_learn::outer::LoopSetup;
 use vicpilco_learn::record::{LoopObserver, LoopOutcome};
 use vicpilco_pilco::policy::Policy;
 
-/// Why a run, a resume, a replay, `rescore` or `evaluate` failed.
+/// Why a run, a resume, a replay, `rescore`, `evaluate` or `recheck` failed.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ExperimentError {
@@ -82,7 +83,7 @@ pub enum ExperimentError {
     NotArm {
         /// The experiment name given.
         name: String,
-        /// The command that needs an arm run: `rescore` or `evaluate`.
+        /// The command that needs an arm run: `rescore`, `evaluate` or `recheck`.
         what: &'static str,
     },
     /// The arm config could not be read, parsed or validated.
@@ -139,6 +140,14 @@ pub enum ExperimentError {
         /// The recorded run's directory, or the file of its policies.
         path: PathBuf,
         /// What is wrong, e.g. an update the run does not have or no evaluation starts.
+        message: String,
+    },
+    /// A recorded run whose claims `recheck` cannot judge again under the settings given.
+    #[error("cannot recheck {path}: {message}")]
+    Recheck {
+        /// The run's `summary.json`.
+        path: PathBuf,
+        /// What is wrong, e.g. the first setting that differs from the run's.
         message: String,
     },
     /// The report (`report.html`, `report.md`, plots) could not be written from the run

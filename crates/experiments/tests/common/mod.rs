@@ -11,6 +11,8 @@ pub fn scratch(prefix: &str, name: &str) -> PathBuf {
 }
 
 /// Every line of a JSON-lines file (`rollouts.jsonl`, `final_eval.jsonl`, ...), parsed.
+// Each test binary compiles this module; not every one reads JSON lines.
+#[allow(dead_code)]
 pub fn json_lines(path: &Path) -> Vec<serde_json::Value> {
     std::fs::read_to_string(path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))

@@ -1,0 +1,159 @@
+//! `vicpilco recheck` judges a recorded run's claims again with this build's checks: it
+//! rewrites only a stale `thesis_reference`, refuses settings that are not the run's, and
+//! every stored run (results/ and probes/) is current with this build, so that `vicpilco
+//! acceptance` never tables an old judgement.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use vicpilco_experiments::recheck::recheck;
+use vicpilco_experiments::ExperimentError;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn read_json(path: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// A copy of the stored vilta seed 3 summary (complete, never inserting) in a scratch
+/// directory, with its "3 consecutive" claim worded as builds before 773c412 wrote it.
+fn stale_vilta_run(name: &str) -> (PathBuf, serde_json::Value) {
+    let dir = common::scratch("recheck", name);
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut summary = read_json(&repo().join("results/vilta-seed3/summary.json"));
+    let claims = summary["thesis_reference"].as_array_mut().unwrap();
+    let three = claims
+        .iter_mut()
+        .find(|c| c["id"] == "vilta_three_after_first")
+        .expect("the stored vilta run makes the 3-consecutive claim");
+    three["measured"] = "not yet".into();
+    std::fs::write(
+        dir.join("summary.json"),
+        serde_json::to_vec_pretty(&summary).unwrap(),
+    )
+    .unwrap();
+    (dir, summary)
+}
+
+#[test]
+fn a_stale_claim_is_judged_again_and_nothing_else_changes() {
+    let (dir, before) = stale_vilta_run("stale");
+    let dry = recheck(&dir, None, false, true).unwrap();
+    assert_eq!(dry.len(), 1, "{dry:?}");
+    assert_eq!(
+        read_json(&dir.join("summary.json")),
+        before,
+        "a dry run writes nothing"
+    );
+
+    let changes = recheck(&dir, None, false, false).unwrap();
+    assert_eq!(changes, dry);
+    let change = &changes[0];
+    assert_eq!(change.id, "vilta_three_after_first");
+    assert_eq!(change.before.as_ref().unwrap().measured, "not yet");
+    let after = change.after.as_ref().unwrap();
+    assert_eq!(
+        after.measured, "never",
+        "a complete run that never inserted"
+    );
+    assert_eq!(after.pass, Some(false));
+
+    let mut rewritten = read_json(&dir.join("summary.json"));
+    let claims = rewritten["thesis_reference"].take();
+    let mut expected = before;
+    expected["thesis_reference"] = serde_json::Value::Null;
+    assert_eq!(rewritten, expected, "only thesis_reference may change");
+    let three = claims
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["id"] == "vilta_three_after_first")
+        .unwrap()
+        .clone();
+    assert_eq!(three["measured"], "never");
+
+    assert!(
+        recheck(&dir, None, false, false).unwrap().is_empty(),
+        "a second recheck finds the summary current"
+    );
+}
+
+#[test]
+fn settings_that_are_not_the_runs_are_refused_with_the_key_that_differs() {
+    let (dir, before) = stale_vilta_run("other-settings");
+    let probe = repo().join("probes/lead-state-y-ceiling/vilta.toml");
+    let err = recheck(&dir, Some(&probe), false, false).unwrap_err();
+    let text = err.to_string();
+    assert!(matches!(err, ExperimentError::Recheck { .. }), "{text}");
+    assert!(text.contains("summary.json"), "{text}");
+    assert!(text.contains("differs"), "{text}");
+    assert_eq!(read_json(&dir.join("summary.json")), before);
+
+    let err = recheck(&dir, None, true, false).unwrap_err();
+    assert!(err.to_string().contains("optimiser.length"), "{err}");
+}
+
+#[test]
+fn a_missing_or_malformed_summary_is_an_error_that_names_the_file() {
+    let dir = common::scratch("recheck", "malformed");
+    std::fs::create_dir_all(&dir).unwrap();
+    let err = recheck(&dir, None, false, false).unwrap_err();
+    assert!(format!("{err:#}").contains("summary.json"), "{err:#}");
+    std::fs::write(dir.join("summary.json"), "{\"experiment\": ").unwrap();
+    let err = recheck(&dir, None, false, false).unwrap_err();
+    assert!(matches!(err, ExperimentError::Recheck { .. }), "{err}");
+    assert!(err.to_string().contains("summary.json"), "{err}");
+}
+
+/// Every stored run with the settings it was run with: results/ with the shipped configs,
+/// probes/<probe>/<experiment>-seed<S>/ with probes/<probe>/<experiment>.toml where the probe
+/// has one (probes of more seeds of the shipped settings have none).
+fn stored_runs() -> Vec<(PathBuf, Option<PathBuf>)> {
+    let mut runs = Vec::new();
+    let subdirs = |dir: PathBuf| -> Vec<PathBuf> {
+        let mut v: Vec<PathBuf> = std::fs::read_dir(&dir)
+            .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.is_dir())
+            .collect();
+        v.sort();
+        v
+    };
+    for run in subdirs(repo().join("results")) {
+        runs.push((run, None));
+    }
+    for probe in subdirs(repo().join("probes")) {
+        for run in subdirs(probe.clone()) {
+            let name = run.file_name().unwrap().to_string_lossy().into_owned();
+            let experiment = name.rsplit_once("-seed").map_or(name.as_str(), |(e, _)| e);
+            let config = probe.join(format!("{experiment}.toml"));
+            runs.push((run, config.is_file().then_some(config)));
+        }
+    }
+    runs
+}
+
+#[test]
+fn every_stored_run_is_judged_as_this_build_judges_it() {
+    let runs = stored_runs();
+    assert!(runs.len() > 30, "only {} stored runs found", runs.len());
+    let stale: Vec<String> = runs
+        .iter()
+        .filter_map(|(dir, config)| {
+            let changes = recheck(dir, config.as_deref(), false, true)
+                .unwrap_or_else(|e| panic!("{}: {e:#}", dir.display()));
+            (!changes.is_empty()).then(|| {
+                let ids: Vec<&str> = changes.iter().map(|c| c.id.as_str()).collect();
+                format!("{} ({})", dir.display(), ids.join(", "))
+            })
+        })
+        .collect();
+    assert!(
+        stale.is_empty(),
+        "stored runs judged by an older build (run scripts/recheck-stored):\n{}",
+        stale.join("\n")
+    );
+}
