@@ -58,6 +58,7 @@ pub mod record;
 pub mod replay;
 pub mod subnormals;
 pub mod summary;
+pub mod summary_config;
 
 use config::{ArmExperiment, FinalPolicy, PolicyKind};
 use record::{open_jsonl, read_checkpoint, ClaimsOf, PredictionLabels, Recorder, RolloutExtras};
@@ -350,26 +351,7 @@ fn run_arm(
     let identity = arm_identity(&cfg)?;
     let planned = cfg.episodes;
     cfg.episodes = opts.episodes_or(cfg.episodes);
-    let arm_cfg = arm::arm_config(&cfg);
-    let g = &arm_cfg.geometry;
-    let mut config = serde_json::to_value(&cfg).map_err(|e| ExperimentError::Write(e.into()))?;
-    config["geometry"] = serde_json::json!({
-        "wall_x": g.wall_x(),
-        "hole_y": g.hole_center[1],
-        "hole_r": g.hole_radius,
-        "end_x": g.end_x(),
-        "spring_catch_x": g.spring_catch_x(),
-    });
-    config["ours"] = serde_json::json!(cfg.ours_keys());
-    if let Some(r) = cfg.start.y_range {
-        config["start_y_range"] = serde_json::json!(r);
-    }
-    config["simulator"] =
-        serde_json::to_value(&arm_cfg).map_err(|e| ExperimentError::Write(e.into()))?;
-    // Runs before the flushing (and runs whose rayon pool could not flush) used gradual
-    // underflow; their numbers differ below 1e-300 and their optimiser paths may part. This is
-    // the latest session's mode; `sessions` lists each session's.
-    config["subnormals"] = serde_json::json!(subnormals::mode_here());
+    let config = summary_config::arm_summary_config(&cfg)?;
     let meta = |policy: String| RunMeta {
         config: config.clone(),
         identity: identity.clone(),

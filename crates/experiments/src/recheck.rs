@@ -8,21 +8,11 @@
 //! `thesis_reference` is rewritten; every recorded number stays as it was.
 
 use crate::checks;
-use crate::config::ArmExperiment;
 use crate::record::first_difference;
 use crate::summary::{write_json_atomic, Summary, ThesisCheck};
+use crate::summary_config::arm_settings;
 use crate::{arm_identity, recorded_arm_config, ExperimentError};
 use std::path::Path;
-
-/// Keys that `vicpilco run` adds to a summary's `config` beside the settings themselves
-/// (derived from them, or about the machine): not part of an [`ArmExperiment`].
-const DERIVED_CONFIG_KEYS: [&str; 5] = [
-    "geometry",
-    "ours",
-    "start_y_range",
-    "simulator",
-    "subnormals",
-];
 
 /// One claim whose judgement this build changes.
 #[derive(Clone, Debug, PartialEq)]
@@ -59,7 +49,7 @@ pub fn recheck(
     let summary: Summary = serde_json::from_value(stored.clone())
         .map_err(|e| bad(format!("not a run summary: {e}")))?;
     let cfg = recorded_arm_config(&summary.experiment, config, quick, "recheck")?;
-    let recorded = recorded_settings(&summary.config).map_err(|e| {
+    let recorded = arm_settings(&summary.config).map_err(|e| {
         bad(format!(
             "its `config` is not one this build reads ({e}); it cannot be judged under today's \
              settings"
@@ -83,17 +73,6 @@ pub fn recheck(
         write_json_atomic(&path, &stored)?;
     }
     Ok(changes)
-}
-
-/// The settings a summary's `config` records, without the keys `vicpilco run` derives.
-fn recorded_settings(config: &serde_json::Value) -> Result<ArmExperiment, serde_json::Error> {
-    let mut settings = config.clone();
-    if let Some(map) = settings.as_object_mut() {
-        for key in DERIVED_CONFIG_KEYS {
-            map.remove(key);
-        }
-    }
-    serde_json::from_value(settings)
 }
 
 /// The claims that differ between `stored` and `judged`, matched by id, in `judged`'s order
