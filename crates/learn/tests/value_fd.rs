@@ -2,7 +2,8 @@
 //! the learning loop uses: linear and RBF policies, with and without squashing (symmetric and
 //! non-negative), relative and absolute targets, an angle (trig augmentation), time as an
 //! input, a prior-mean shift, linear prior terms, the std and energy terms, discounting and
-//! K > 1 starts.
+//! K > 1 starts. Each variant must also give the same J and dJ/dψ, bit for bit, on one thread
+//! and on several.
 
 use faer::Mat;
 use rand::{RngExt, SeedableRng};
@@ -188,6 +189,21 @@ fn check(v: Variant, seed: u64) -> (f64, Vec<f64>) {
     let (j0, grad) = run(&p0, true);
     assert!(j0.is_finite());
     let grad = grad.unwrap();
+    // Runs are reproduced on machines with other core counts (and resumed with another
+    // RAYON_NUM_THREADS), so J and dJ/dψ must not depend on how the work is split.
+    for threads in [1, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let (j, g) = pool.install(|| run(&p0, true));
+        assert_eq!(
+            (j, g.as_deref()),
+            (j0, Some(grad.as_slice())),
+            "{} on {threads} threads",
+            v.name
+        );
+    }
     for trial in 0..3 {
         let dir: Vec<f64> = p0.iter().map(|_| normal(&mut rng)).collect();
         let numeric = directional(&mut |p: &[f64]| run(p, false).0, &p0, &dir, 1e-5);

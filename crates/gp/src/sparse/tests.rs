@@ -244,6 +244,32 @@ fn training_inducing_inputs_decreases_the_summed_fitc_nlml() {
 }
 
 #[test]
+fn inducing_inputs_train_the_same_on_one_thread_and_on_many() {
+    let mut rng = ChaCha8Rng::seed_from_u64(26);
+    let (n, d, m) = (80, 3, 8);
+    let x = normal_mat(n, d, &mut rng);
+    let y = smooth(&x, 3, &mut rng);
+    let hyp: Vec<Hyper> = (0..3).map(|_| hyp_for(&x, &mut rng)).collect();
+    let sub = select_subset(n, m, 5);
+    let u0 = Mat::from_fn(m, d, |i, c| x[(sub[i], c)]);
+    let opts = InducingOptions {
+        max_iters: 10,
+        ..Default::default()
+    };
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let (u, rep) = pool
+            .install(|| train_inducing(x.as_ref(), y.as_ref(), &hyp, u0.as_ref(), &opts))
+            .unwrap();
+        (u, rep.nlml, rep.output_nlml)
+    };
+    assert_eq!(on(1), on(3));
+}
+
+#[test]
 fn dynamics_model_switches_to_sparse_above_the_threshold() {
     let mut rng = ChaCha8Rng::seed_from_u64(26);
     let (n, d) = (60, 2);
