@@ -4,8 +4,11 @@
 //! acceptance` never tables an old judgement.
 
 mod common;
+#[path = "../../report/tests/common/stored_runs.rs"]
+mod stored_runs;
 
 use std::path::{Path, PathBuf};
+use stored_runs::{every_run, settings_file};
 use vicpilco_experiments::recheck::recheck;
 use vicpilco_experiments::ExperimentError;
 
@@ -108,42 +111,14 @@ fn a_missing_or_malformed_summary_is_an_error_that_names_the_file() {
     assert!(err.to_string().contains("summary.json"), "{err}");
 }
 
-/// Every stored run with the settings it was run with: results/ with the shipped configs,
-/// probes/<probe>/<experiment>-seed<S>/ with probes/<probe>/<experiment>.toml where the probe
-/// has one (probes of more seeds of the shipped settings have none).
-fn stored_runs() -> Vec<(PathBuf, Option<PathBuf>)> {
-    let mut runs = Vec::new();
-    let subdirs = |dir: PathBuf| -> Vec<PathBuf> {
-        let mut v: Vec<PathBuf> = std::fs::read_dir(&dir)
-            .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
-            .map(|e| e.unwrap().path())
-            .filter(|p| p.is_dir())
-            .collect();
-        v.sort();
-        v
-    };
-    for run in subdirs(repo().join("results")) {
-        runs.push((run, None));
-    }
-    for probe in subdirs(repo().join("probes")) {
-        for run in subdirs(probe.clone()) {
-            let name = run.file_name().unwrap().to_string_lossy().into_owned();
-            let experiment = name.rsplit_once("-seed").map_or(name.as_str(), |(e, _)| e);
-            let config = probe.join(format!("{experiment}.toml"));
-            runs.push((run, config.is_file().then_some(config)));
-        }
-    }
-    runs
-}
-
 #[test]
 fn every_stored_run_is_judged_as_this_build_judges_it() {
-    let runs = stored_runs();
+    let runs = every_run();
     assert!(runs.len() > 30, "only {} stored runs found", runs.len());
     let stale: Vec<String> = runs
         .iter()
-        .filter_map(|(dir, config)| {
-            let changes = recheck(dir, config.as_deref(), false, true)
+        .filter_map(|dir| {
+            let changes = recheck(dir, settings_file(dir).as_deref(), false, true)
                 .unwrap_or_else(|e| panic!("{}: {e:#}", dir.display()));
             (!changes.is_empty()).then(|| {
                 let ids: Vec<&str> = changes.iter().map(|c| c.id.as_str()).collect();

@@ -3,47 +3,17 @@
 //! parse, be named after its experiment and seed, and appear in the acceptance table over its
 //! group, so that `vicpilco acceptance results/*/` reproduces what EXPERIMENTS.md quotes.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use vicpilco_report::acceptance_markdown;
 
-fn repo_dir(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .join(name)
-}
+#[path = "common/stored_runs.rs"]
+mod stored_runs;
 
-/// The sub-folders of `dir`, sorted; none when `dir` does not exist.
-fn folders(dir: &Path) -> Vec<PathBuf> {
-    let mut dirs: Vec<PathBuf> = match std::fs::read_dir(dir) {
-        Ok(entries) => entries
-            .map(|e| e.expect("readable directory entry").path())
-            .filter(|p| p.is_dir())
-            .collect(),
-        Err(_) => Vec::new(),
-    };
-    dirs.sort();
-    dirs
-}
-
-fn stored_runs() -> Vec<PathBuf> {
-    folders(&repo_dir("results"))
-}
-
-/// Each probe's runs, as its own group (a probe may repeat a seed of results/).
-fn probe_groups() -> Vec<Vec<PathBuf>> {
-    folders(&repo_dir("probes"))
-        .iter()
-        .map(|probe| folders(probe))
-        .collect()
-}
+use stored_runs::{every_run, probe_groups, result_runs};
 
 #[test]
 fn every_stored_run_is_named_after_its_experiment_and_seed_and_is_complete() {
-    let dirs: Vec<PathBuf> = stored_runs()
-        .into_iter()
-        .chain(probe_groups().into_iter().flatten())
-        .collect();
-    for dir in &dirs {
+    for dir in &every_run() {
         let text = std::fs::read_to_string(dir.join("summary.json"))
             .unwrap_or_else(|e| panic!("{}: {e}", dir.join("summary.json").display()));
         let summary: serde_json::Value = serde_json::from_str(&text)
@@ -76,7 +46,7 @@ fn every_stored_run_is_named_after_its_experiment_and_seed_and_is_complete() {
 
 #[test]
 fn the_acceptance_table_covers_every_stored_run() {
-    let results = stored_runs();
+    let results = result_runs();
     assert!(!results.is_empty(), "results/ holds no stored run");
     for dirs in std::iter::once(results).chain(probe_groups()) {
         covers_every_run(&dirs);
@@ -109,12 +79,11 @@ fn covers_every_run(dirs: &[PathBuf]) {
 /// (when the run got that far); and `evaluate.md` must have a row for each line.
 #[test]
 fn a_stored_evaluation_covers_every_update_and_repeats_the_final_one() {
-    let dirs: Vec<PathBuf> = stored_runs()
+    let dirs: Vec<PathBuf> = every_run()
         .into_iter()
-        .chain(probe_groups().into_iter().flatten())
         .filter(|d| d.join("evaluate.jsonl").exists())
         .collect();
-    for dir in stored_runs() {
+    for dir in result_runs() {
         let name = dir.file_name().unwrap().to_string_lossy().into_owned();
         assert!(
             !name.starts_with("vilta-var-") || dirs.contains(&dir),
