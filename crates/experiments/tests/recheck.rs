@@ -8,13 +8,9 @@ mod common;
 mod stored_runs;
 
 use std::path::{Path, PathBuf};
-use stored_runs::{every_run, settings_file};
+use stored_runs::{every_run, repo_dir, settings_file};
 use vicpilco_experiments::recheck::recheck;
 use vicpilco_experiments::ExperimentError;
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 fn read_json(path: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
@@ -26,7 +22,7 @@ fn read_json(path: &Path) -> serde_json::Value {
 fn stale_vilta_run(name: &str) -> (PathBuf, serde_json::Value) {
     let dir = common::scratch("recheck", name);
     std::fs::create_dir_all(&dir).unwrap();
-    let mut summary = read_json(&repo().join("results/vilta-seed3/summary.json"));
+    let mut summary = read_json(&repo_dir("results/vilta-seed3/summary.json"));
     let claims = summary["thesis_reference"].as_array_mut().unwrap();
     let three = claims
         .iter_mut()
@@ -87,7 +83,7 @@ fn a_stale_claim_is_judged_again_and_nothing_else_changes() {
 #[test]
 fn settings_that_are_not_the_runs_are_refused_with_the_key_that_differs() {
     let (dir, before) = stale_vilta_run("other-settings");
-    let probe = repo().join("probes/lead-state-y-ceiling/vilta.toml");
+    let probe = repo_dir("probes/lead-state-y-ceiling/vilta.toml");
     let err = recheck(&dir, Some(&probe), false, false).unwrap_err();
     let text = err.to_string();
     assert!(matches!(err, ExperimentError::Recheck { .. }), "{text}");

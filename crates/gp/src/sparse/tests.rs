@@ -217,15 +217,35 @@ fn subset_selection_is_deterministic_distinct_and_seeded() {
     assert_eq!(select_subset(5, 10, 1), vec![0, 1, 2, 3, 4]);
 }
 
+/// Training data, hyper-parameters and starting inducing inputs for `train_inducing`.
+struct InducingProblem {
+    x: Mat<f64>,
+    y: Mat<f64>,
+    hyp: Vec<Hyper>,
+    u0: Mat<f64>,
+}
+
+/// `n` random inputs of dimension `d`, smooth targets of `outputs` outputs with their
+/// hyper-parameters, and `m` of the inputs (subset seed `subset_seed`) as the starting inducing
+/// inputs.
+fn inducing_problem(
+    seed: u64,
+    (n, d, m): (usize, usize, usize),
+    outputs: usize,
+    subset_seed: u64,
+) -> InducingProblem {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let x = normal_mat(n, d, &mut rng);
+    let y = smooth(&x, outputs, &mut rng);
+    let hyp = (0..outputs).map(|_| hyp_for(&x, &mut rng)).collect();
+    let sub = select_subset(n, m, subset_seed);
+    let u0 = Mat::from_fn(m, d, |i, c| x[(sub[i], c)]);
+    InducingProblem { x, y, hyp, u0 }
+}
+
 #[test]
 fn training_inducing_inputs_decreases_the_summed_fitc_nlml() {
-    let mut rng = ChaCha8Rng::seed_from_u64(25);
-    let (n, d, m) = (120, 2, 10);
-    let x = normal_mat(n, d, &mut rng);
-    let y = smooth(&x, 2, &mut rng);
-    let hyp = vec![hyp_for(&x, &mut rng), hyp_for(&x, &mut rng)];
-    let sub = select_subset(n, m, 3);
-    let u0 = Mat::from_fn(m, d, |i, c| x[(sub[i], c)]);
+    let InducingProblem { x, y, hyp, u0 } = inducing_problem(25, (120, 2, 10), 2, 3);
     let opts = InducingOptions {
         max_iters: 30,
         ..Default::default()
@@ -245,13 +265,7 @@ fn training_inducing_inputs_decreases_the_summed_fitc_nlml() {
 
 #[test]
 fn inducing_inputs_train_the_same_on_one_thread_and_on_many() {
-    let mut rng = ChaCha8Rng::seed_from_u64(26);
-    let (n, d, m) = (80, 3, 8);
-    let x = normal_mat(n, d, &mut rng);
-    let y = smooth(&x, 3, &mut rng);
-    let hyp: Vec<Hyper> = (0..3).map(|_| hyp_for(&x, &mut rng)).collect();
-    let sub = select_subset(n, m, 5);
-    let u0 = Mat::from_fn(m, d, |i, c| x[(sub[i], c)]);
+    let InducingProblem { x, y, hyp, u0 } = inducing_problem(26, (80, 3, 8), 3, 5);
     let opts = InducingOptions {
         max_iters: 10,
         ..Default::default()
