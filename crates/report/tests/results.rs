@@ -9,7 +9,7 @@ use vicpilco_report::acceptance_markdown;
 #[path = "common/stored_runs.rs"]
 mod stored_runs;
 
-use stored_runs::{every_run, probe_groups, result_runs};
+use stored_runs::{every_run, folders, probe_groups, repo_dir, result_runs};
 
 #[test]
 fn every_stored_run_is_named_after_its_experiment_and_seed_and_is_complete() {
@@ -40,6 +40,25 @@ fn every_stored_run_is_named_after_its_experiment_and_seed_and_is_complete() {
             dir.join("report.md").is_file(),
             "{} lacks report.md",
             dir.display()
+        );
+    }
+}
+
+/// probes/README.md is where a reader learns what a probe changed and what it found, so a
+/// probe folder without its row there cannot be read.
+#[test]
+fn every_probe_has_a_row_in_the_probes_readme() {
+    let readme_path = repo_dir("probes").join("README.md");
+    let readme = std::fs::read_to_string(&readme_path)
+        .unwrap_or_else(|e| panic!("{}: {e}", readme_path.display()));
+    let probes = folders(&repo_dir("probes"));
+    assert!(!probes.is_empty(), "probes/ holds no probe");
+    for probe in probes {
+        let name = probe.file_name().unwrap().to_string_lossy();
+        assert!(
+            readme.contains(&format!("\n| `{name}` |")),
+            "probe {name} has no row in {}",
+            readme_path.display()
         );
     }
 }
