@@ -72,4 +72,10 @@ pub struct StepInfo {
     /// transition spans less than `dt`, so a learner must not fit its dynamics to it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopped_early: Option<String>,
+    /// Where the system's end point went during the step: its true (x, y) at regular instants
+    /// within the step, the last at the step's end. One sample per step would draw straight
+    /// chords that cut through the corners a contact makes; plots join these instead. Empty
+    /// when the system does not record it (the classic systems, runs recorded before it).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub path: Vec<[f64; 2]>,
 }

@@ -2,7 +2,7 @@
 
 mod common;
 use common::run;
-use vicpilco_env::arm::{ArmConfig, ControllerKind, ReferenceSpec, ViaPlan};
+use vicpilco_env::arm::{ArmConfig, ControllerKind, ReferenceSpec, ViaPlan, PATH_SAMPLE_INTERVAL};
 
 /// The thesis plan with the slide ending at y_t instead of the hole centre. Targets above the
 /// hole centre are approached from above (the plan mirrored about y = 0.20: start and P1 at
@@ -150,4 +150,38 @@ fn check_g_nominal_episode_inserts() {
             );
         }
     }
+}
+
+/// Each step's `path` is the TCP of the per-tick trace every `PATH_SAMPLE_INTERVAL`, ending at
+/// the step's true state, so a plot joining it follows the peg round the hole's corner.
+#[test]
+fn step_paths_sample_the_tick_trace() {
+    let (env, steps) = run(ArmConfig::ideal(), [0.5, 0.0], [250.0, 250.0], 1, 100);
+    let cfg = env.config();
+    let ticks = cfg.ticks_per_step();
+    let every = (PATH_SAMPLE_INTERVAL * cfg.control_hz).round() as usize;
+    assert_eq!(ticks % every, 0, "the interval divides the step");
+    let trace = env.trace();
+    let mut largest_chord: f64 = 0.0;
+    let mut previous = [0.5, 0.0];
+    for (s, step) in steps.iter().enumerate() {
+        let path = &step.info.path;
+        assert_eq!(path.len(), ticks / every, "step {s}");
+        let last = path.last().unwrap();
+        assert_eq!(
+            last[..],
+            step.info.true_state[..2],
+            "step {s} ends at its state"
+        );
+        for (i, p) in path[..path.len() - 1].iter().enumerate() {
+            let r = &trace[s * ticks + (i + 1) * every];
+            assert_eq!(p[..], r.x[..2], "step {s}, sample {i}");
+        }
+        for p in path {
+            largest_chord = largest_chord.max((p[0] - previous[0]).hypot(p[1] - previous[1]));
+            previous = *p;
+        }
+    }
+    assert!(env.inserted(), "the nominal episode passes the corner");
+    assert!(largest_chord < 0.005, "chord {largest_chord} m");
 }

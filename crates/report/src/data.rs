@@ -245,6 +245,9 @@ pub(crate) struct Rollout {
     /// Why the system ended the roll-out before the horizon (its last step's
     /// `stopped_early`), if it did.
     pub stopped_early: Option<String>,
+    /// The true (x, y) from the start through every within-step sample the system recorded
+    /// (`infos[].path`); empty when a step has none.
+    pub path: Vec<(f64, f64)>,
 }
 
 impl Rollout {

@@ -192,17 +192,33 @@ fn arm(run: &Run, out: &mut Out, notes: &mut Vec<String>) -> Result<(), ReportEr
         return final_eval(run, out, notes);
     };
     match run.rollouts.as_deref() {
-        Some(r) if !r.is_empty() => out.add(
-            &Paths {
-                rollouts: r,
-                geometry: g,
-                start_y_range: s.start_y_range,
-            },
-            "paths",
-            "TCP x–y path of every roll-out (grey: initial; colour: policy update, dark to \
-             light), with the wall and the hole channel."
-                .into(),
-        )?,
+        Some(r) if !r.is_empty() => {
+            let sampled = match r.iter().filter(|r| r.path.is_empty()).count() {
+                0 => "sampled within each step".to_string(),
+                n if n == r.len() => {
+                    "joining the states at the ends of the steps (the run recorded \
+                                      no within-step path)"
+                        .to_string()
+                }
+                n => format!(
+                    "sampled within each step ({n} of {} roll-outs recorded no within-step \
+                     path and join the states at the ends of the steps)",
+                    r.len()
+                ),
+            };
+            out.add(
+                &Paths {
+                    rollouts: r,
+                    geometry: g,
+                    start_y_range: s.start_y_range,
+                },
+                "paths",
+                format!(
+                    "TCP x–y path of every roll-out, {sampled} (grey: initial; colour: policy \
+                     update, dark to light), with the wall and the hole channel."
+                ),
+            )?
+        }
         _ => notes.push("no recorded roll-outs: no paths plot".into()),
     }
     final_eval(run, out, notes)

@@ -122,6 +122,72 @@ fn vilta_var_adds_final_eval_and_yellow_updates() {
     assert!(page.contains("start_y_range"));
 }
 
+/// A roll-out whose every step recorded a within-step path is drawn along it, and the caption
+/// says which roll-outs were; a malformed sample is an error naming it.
+#[test]
+fn paths_follow_the_within_step_samples_when_every_step_has_them() {
+    let tmp = TempDir::new("within-step-paths");
+    write_run(tmp.path(), Kind::Vilta);
+    write_report(tmp.path()).unwrap();
+    let caption = |dir: &Path| {
+        let page = html(dir);
+        let at = page
+            .find("TCP x–y path of every roll-out")
+            .expect("paths caption");
+        page[at..at + 220].to_string()
+    };
+    assert!(caption(tmp.path()).contains(
+        "joining the states at the ends of the steps (the run recorded no within-step path)"
+    ));
+
+    let rollouts = tmp.path().join("rollouts.jsonl");
+    // Every roll-out but the first gets a two-sample path per step: the step's midpoint and end.
+    edit_lines(&rollouts, |i, v| {
+        if i == 0 {
+            return;
+        }
+        let states = v["rollout"]["true_states"].as_array().unwrap().clone();
+        let infos: Vec<Value> = states
+            .windows(2)
+            .map(|w| {
+                let (a, b) = (&w[0], &w[1]);
+                let mid = |j: usize| (a[j].as_f64().unwrap() + b[j].as_f64().unwrap()) / 2.0;
+                serde_json::json!({"path": [[mid(0), mid(1)], [b[0], b[1]]]})
+            })
+            .collect();
+        v["rollout"]["infos"] = infos.into();
+    });
+    let run = crate::data::Run::load(tmp.path()).unwrap();
+    let all = run.rollouts.as_deref().unwrap();
+    assert!(all[0].path.is_empty());
+    for r in &all[1..] {
+        let s = &r.true_states;
+        assert_eq!(r.path.len(), 2 * s.len() - 1);
+        assert_eq!(r.path[0], (s[0][0], s[0][1]));
+        assert_eq!(
+            r.path[1],
+            ((s[0][0] + s[1][0]) / 2.0, (s[0][1] + s[1][1]) / 2.0)
+        );
+        let last = s.last().unwrap();
+        assert_eq!(*r.path.last().unwrap(), (last[0], last[1]));
+    }
+    write_report(tmp.path()).unwrap();
+    let n = all.len();
+    assert!(
+        caption(tmp.path()).contains(&format!("sampled within each step (1 of {n} roll-outs")),
+        "{}",
+        caption(tmp.path())
+    );
+
+    edit_lines(&rollouts, |i, v| {
+        if i == 2 {
+            v["rollout"]["infos"][3]["path"][1] = serde_json::json!([0.7]);
+        }
+    });
+    let err = write_report(tmp.path()).unwrap_err().to_string();
+    assert!(err.contains("line 3: rollout.infos[3].path[1]"), "{err}");
+}
+
 /// With `final_eval.update` (`vilta.final_policy`) the policy plot and the final evaluation are
 /// of that update, also when it is not the last; a named update without a prediction falls
 /// back to the last with a note.

@@ -32,7 +32,7 @@ pub mod sensors;
 pub mod sim;
 pub mod trace;
 
-pub use env::{ArmEnv, LEAD_NAMES, START_MAX_PENETRATION, STATE_NAMES};
+pub use env::{ArmEnv, LEAD_NAMES, PATH_SAMPLE_INTERVAL, START_MAX_PENETRATION, STATE_NAMES};
 pub use ou::OuParams;
 pub use params::{
     ActionMode, ArmConfig, ArmParams, ContactParams, ControllerKind, Geometry, ImpedanceParams,

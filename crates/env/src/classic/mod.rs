@@ -277,6 +277,7 @@ impl<P: ClassicSystem + Dynamics<N>, const N: usize> Environment for ClassicEnv<
                 flags: BTreeMap::new(),
                 values,
                 stopped_early: None,
+                path: Vec::new(),
             },
             done: e.steps == s.horizon,
         })

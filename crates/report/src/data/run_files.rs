@@ -103,16 +103,21 @@ fn parse_trajectory(r: Node<'_>) -> Result<(Rows, Rows), ReportError> {
 }
 
 pub(super) fn parse_rollout_line(n: Node<'_>) -> Result<Rollout, ReportError> {
-    let (actions, true_states, stopped_early) = n.req("rollout", |r| {
+    let (actions, true_states, stopped_early, path) = n.req("rollout", |r| {
         let (actions, true_states) = parse_trajectory(r)?;
-        let stopped_early = r.with("infos", |infos| match infos {
-            None => Ok(None),
-            Some(infos) => Ok(infos
-                .map_array(|i| i.opt_string("stopped_early"))?
-                .pop()
-                .flatten()),
+        let (stopped_early, path) = r.with("infos", |infos| match infos {
+            None => Ok((None, Vec::new())),
+            Some(infos) => {
+                let steps = infos.map_array(|i| {
+                    let path = i.with("path", |p| p.map(xy_pairs).transpose())?;
+                    Ok((i.opt_string("stopped_early")?, path.unwrap_or_default()))
+                })?;
+                let (mut stopped, paths): (Vec<_>, Vec<_>) = steps.into_iter().unzip();
+                let stopped_early = stopped.pop().flatten();
+                Ok((stopped_early, within_step_path(&true_states, &paths)))
+            }
         })?;
-        Ok((actions, true_states, stopped_early))
+        Ok((actions, true_states, stopped_early, path))
     })?;
     Ok(Rollout {
         episode: n.req_u64("episode")?,
@@ -120,7 +125,32 @@ pub(super) fn parse_rollout_line(n: Node<'_>) -> Result<Rollout, ReportError> {
         actions,
         true_states,
         stopped_early,
+        path,
     })
+}
+
+/// An array of `[x, y]` pairs.
+fn xy_pairs(n: Node<'_>) -> Result<Vec<(f64, f64)>, ReportError> {
+    n.map_array(|q| match q.f64_vec()?[..] {
+        [x, y] => Ok((x, y)),
+        _ => Err(q.malformed("an [x, y] pair")),
+    })
+}
+
+/// The start's (x, y) followed by every step's within-step samples, when each step (one info
+/// per true state after the first) has them; otherwise empty, and plots fall back to joining
+/// the steps' true states.
+fn within_step_path(true_states: &Rows, steps: &[Vec<(f64, f64)>]) -> Vec<(f64, f64)> {
+    let start = true_states
+        .first()
+        .and_then(|s| Some((*s.first()?, *s.get(1)?)));
+    let every_step = !steps.is_empty() && steps.len() + 1 == true_states.len();
+    match start {
+        Some(start) if every_step && steps.iter().all(|p| !p.is_empty()) => std::iter::once(start)
+            .chain(steps.iter().flatten().copied())
+            .collect(),
+        _ => Vec::new(),
+    }
 }
 
 /// Runs before rollouts.jsonl wrote one `{"initial": [...], "learned": [...]}` document with
@@ -148,6 +178,7 @@ pub(super) fn read_old_rollouts(
                         actions,
                         true_states,
                         stopped_early: None,
+                        path: Vec::new(),
                     })
                 })
             }

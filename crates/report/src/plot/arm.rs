@@ -20,7 +20,11 @@ pub(crate) struct Paths<'a> {
     pub start_y_range: Option<(f64, f64)>,
 }
 
+/// The roll-out's within-step path when it was recorded, else its states 0.1 s apart.
 fn xy(r: &Rollout) -> Vec<(f64, f64)> {
+    if !r.path.is_empty() {
+        return r.path.clone();
+    }
     let pts = r.true_states.iter();
     pts.filter_map(|s| Some((*s.first()?, *s.get(1)?)))
         .collect()

@@ -141,6 +141,7 @@ fn action_statistics_of_a_constant_gain_and_of_missing_components() {
         actions: vec![vec![252.5, 10.0], vec![252.5, 30.0]],
         true_states: Vec::new(),
         stopped_early: None,
+        path: Vec::new(),
     };
     assert_eq!(r.action_mean_std(0), Some((252.5, 0.0)));
     assert_eq!(r.action_mean_std(1), Some((20.0, 10.0)));
