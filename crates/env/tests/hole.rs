@@ -2,7 +2,7 @@
 
 mod common;
 use common::run;
-use vicpilco_env::arm::{ArmConfig, ControllerKind, ReferenceSpec, ViaPlan, PATH_SAMPLE_INTERVAL};
+use vicpilco_env::arm::{ArmConfig, ControllerKind, ReferenceSpec, ViaPlan};
 
 /// The thesis plan with the slide ending at y_t instead of the hole centre. Targets above the
 /// hole centre are approached from above (the plan mirrored about y = 0.20: start and P1 at
@@ -152,14 +152,16 @@ fn check_g_nominal_episode_inserts() {
     }
 }
 
-/// Each step's `path` is the TCP of the per-tick trace every `PATH_SAMPLE_INTERVAL`, ending at
-/// the step's true state, so a plot joining it follows the peg round the hole's corner.
+/// Each step's `path` is the TCP of the per-tick trace every `PATH_SAMPLE_INTERVAL` (10 ms),
+/// ending at the step's true state, so a plot joining it follows the peg round the hole's
+/// corner.
 #[test]
 fn step_paths_sample_the_tick_trace() {
     let (env, steps) = run(ArmConfig::ideal(), [0.5, 0.0], [250.0, 250.0], 1, 100);
     let cfg = env.config();
     let ticks = cfg.ticks_per_step();
-    let every = (PATH_SAMPLE_INTERVAL * cfg.control_hz).round() as usize;
+    let every = cfg.ticks_per_path_sample();
+    assert_eq!(every, 10, "PATH_SAMPLE_INTERVAL at 1 kHz");
     assert_eq!(ticks % every, 0, "the interval divides the step");
     let trace = env.trace();
     let mut largest_chord: f64 = 0.0;

@@ -315,8 +315,7 @@ impl Environment for ArmEnv {
         let mut diverged = false;
         let mut stopped_early = None;
         let mut max_f: f64 = 0.0;
-        let ticks_per_sample =
-            ((PATH_SAMPLE_INTERVAL * self.cfg.control_hz).round() as usize).clamp(1, ticks.max(1));
+        let ticks_per_sample = self.cfg.ticks_per_path_sample();
         let mut path = Vec::with_capacity(ticks / ticks_per_sample + 1);
         for tick in 0..ticks {
             let sim = self.sim.as_ref().expect("checked above");

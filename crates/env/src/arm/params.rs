@@ -443,6 +443,14 @@ impl ArmConfig {
         (self.step_dt * self.control_hz).round() as usize
     }
 
+    /// Control ticks between two samples of [`StepInfo::path`](crate::StepInfo::path): every
+    /// [`PATH_SAMPLE_INTERVAL`](super::PATH_SAMPLE_INTERVAL), at least one tick and at most
+    /// a step.
+    pub fn ticks_per_path_sample(&self) -> usize {
+        ((super::PATH_SAMPLE_INTERVAL * self.control_hz).round() as usize)
+            .clamp(1, self.ticks_per_step().max(1))
+    }
+
     /// RK4 substeps per control tick.
     pub fn substeps(&self) -> usize {
         let period = 1.0 / self.control_hz;
