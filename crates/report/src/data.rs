@@ -247,7 +247,18 @@ pub(crate) struct Rollout {
     pub stopped_early: Option<String>,
     /// The true (x, y) from the start through every within-step sample the system recorded
     /// (`infos[].path`); empty when a step has none.
-    pub path: Vec<(f64, f64)>,
+    pub path: Vec<PathPoint>,
+}
+
+/// One sample of a roll-out's within-step path. `step` counts steps from the roll-out's
+/// start: the record gives no sample times, but the system samples at regular instants with
+/// the last at the step's end, so sample j of n within step k lies at k + j/n. (A step the
+/// system ended early spans less than `dt`; its samples are spread over the whole step.)
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PathPoint {
+    pub step: f64,
+    pub x: f64,
+    pub y: f64,
 }
 
 impl Rollout {
@@ -300,6 +311,8 @@ pub(crate) struct Prediction {
 pub(crate) struct FinalEval {
     pub success: bool,
     pub true_states: Vec<Vec<f64>>,
+    /// As [`Rollout::path`].
+    pub path: Vec<PathPoint>,
 }
 
 pub(crate) struct Run {

@@ -193,19 +193,7 @@ fn arm(run: &Run, out: &mut Out, notes: &mut Vec<String>) -> Result<(), ReportEr
     };
     match run.rollouts.as_deref() {
         Some(r) if !r.is_empty() => {
-            let sampled = match r.iter().filter(|r| r.path.is_empty()).count() {
-                0 => "sampled within each step".to_string(),
-                n if n == r.len() => {
-                    "joining the states at the ends of the steps (the run recorded \
-                                      no within-step path)"
-                        .to_string()
-                }
-                n => format!(
-                    "sampled within each step ({n} of {} roll-outs recorded no within-step \
-                     path and join the states at the ends of the steps)",
-                    r.len()
-                ),
-            };
+            let sampled = sampling(r.iter().filter(|r| r.path.is_empty()).count(), r.len());
             out.add(
                 &Paths {
                     rollouts: r,
@@ -224,6 +212,21 @@ fn arm(run: &Run, out: &mut Out, notes: &mut Vec<String>) -> Result<(), ReportEr
     final_eval(run, out, notes)
 }
 
+/// How a plot of `total` roll-outs, `lacking` of which recorded no within-step path, draws
+/// them: runs recorded before the arm sampled its path within steps have only the states.
+fn sampling(lacking: usize, total: usize) -> String {
+    match lacking {
+        0 => "sampled within each step".to_string(),
+        n if n == total => "joining the states at the ends of the steps (the run recorded no \
+                            within-step path)"
+            .to_string(),
+        n => format!(
+            "sampled within each step ({n} of {total} roll-outs recorded no within-step path and \
+             join the states at the ends of the steps)"
+        ),
+    }
+}
+
 fn final_eval(run: &Run, out: &mut Out, notes: &mut Vec<String>) -> Result<(), ReportError> {
     let Some(evals) = run.final_eval.as_deref() else {
         return Ok(());
@@ -237,6 +240,18 @@ fn final_eval(run: &Run, out: &mut Out, notes: &mut Vec<String>) -> Result<(), R
         notes
             .push("no time step (predictions.jsonl or config.dt): final_eval is over steps".into());
     }
+    let policy = match run.summary.final_eval_update {
+        Some(u) => format!("The final policy (update {u}'s, chosen by vilta.final_policy)"),
+        None => "The final policy".to_string(),
+    };
+    let sampled = sampling(
+        evals.iter().filter(|e| e.path.is_empty()).count(),
+        evals.len(),
+    );
+    let caption = format!(
+        "{policy} from fresh start positions: y(t) of each roll-out, {sampled}, green if \
+         it inserts, red if not."
+    );
     out.add(
         &FinalEvalPlot {
             evals,
@@ -245,14 +260,6 @@ fn final_eval(run: &Run, out: &mut Out, notes: &mut Vec<String>) -> Result<(), R
             dt,
         },
         "final_eval",
-        match run.summary.final_eval_update {
-            Some(u) => format!(
-                "The final policy (update {u}'s, chosen by vilta.final_policy) from fresh start \
-                 positions: y(t) of each roll-out, green if it inserts, red if not."
-            ),
-            None => "The final policy from fresh start positions: y(t) of each roll-out, green \
-                     if it inserts, red if not."
-                .into(),
-        },
+        caption,
     )
 }

@@ -122,6 +122,48 @@ fn vilta_var_adds_final_eval_and_yellow_updates() {
     assert!(page.contains("start_y_range"));
 }
 
+/// The report page's text from `start` up to the next tag: a caption.
+fn caption_from(dir: &Path, start: &str) -> String {
+    let page = html(dir);
+    let at = page
+        .find(start)
+        .unwrap_or_else(|| panic!("no {start:?} on the page"));
+    let end = page[at..].find('<').map_or(page.len(), |n| at + n);
+    page[at..end].to_string()
+}
+
+/// Gives a roll-out record a two-sample path per step: the step's midpoint and its end.
+fn add_midpoint_paths(v: &mut Value) {
+    let states = v["rollout"]["true_states"].as_array().unwrap().clone();
+    let infos: Vec<Value> = states
+        .windows(2)
+        .map(|w| {
+            let (a, b) = (&w[0], &w[1]);
+            let mid = |j: usize| (a[j].as_f64().unwrap() + b[j].as_f64().unwrap()) / 2.0;
+            serde_json::json!({"path": [[mid(0), mid(1)], [b[0], b[1]]]})
+        })
+        .collect();
+    v["rollout"]["infos"] = infos.into();
+}
+
+/// The path [`add_midpoint_paths`] records, read back with each sample's time in steps.
+fn assert_midpoint_path(states: &[Vec<f64>], path: &[crate::data::PathPoint]) {
+    let point = |step: f64, s: &[f64]| crate::data::PathPoint {
+        step,
+        x: s[0],
+        y: s[1],
+    };
+    assert_eq!(path.len(), 2 * states.len() - 1);
+    assert_eq!(path[0], point(0.0, &states[0]));
+    let mid: Vec<f64> = (0..2)
+        .map(|j| (states[0][j] + states[1][j]) / 2.0)
+        .collect();
+    assert_eq!(path[1], point(0.5, &mid));
+    assert_eq!(path[2], point(1.0, &states[1]));
+    let k = states.len() - 1;
+    assert_eq!(*path.last().unwrap(), point(k as f64, &states[k]));
+}
+
 /// A roll-out whose every step recorded a within-step path is drawn along it, and the caption
 /// says which roll-outs were; a malformed sample is an error naming it.
 #[test]
@@ -129,48 +171,22 @@ fn paths_follow_the_within_step_samples_when_every_step_has_them() {
     let tmp = TempDir::new("within-step-paths");
     write_run(tmp.path(), Kind::Vilta);
     write_report(tmp.path()).unwrap();
-    let caption = |dir: &Path| {
-        let page = html(dir);
-        let at = page
-            .find("TCP x–y path of every roll-out")
-            .expect("paths caption");
-        let end = page[at..].find('<').map_or(page.len(), |n| at + n);
-        page[at..end].to_string()
-    };
+    let caption = |dir: &Path| caption_from(dir, "TCP x–y path of every roll-out");
     assert!(caption(tmp.path()).contains(
         "joining the states at the ends of the steps (the run recorded no within-step path)"
     ));
 
     let rollouts = tmp.path().join("rollouts.jsonl");
-    // Every roll-out but the first gets a two-sample path per step: the step's midpoint and end.
     edit_lines(&rollouts, |i, v| {
-        if i == 0 {
-            return;
+        if i > 0 {
+            add_midpoint_paths(v);
         }
-        let states = v["rollout"]["true_states"].as_array().unwrap().clone();
-        let infos: Vec<Value> = states
-            .windows(2)
-            .map(|w| {
-                let (a, b) = (&w[0], &w[1]);
-                let mid = |j: usize| (a[j].as_f64().unwrap() + b[j].as_f64().unwrap()) / 2.0;
-                serde_json::json!({"path": [[mid(0), mid(1)], [b[0], b[1]]]})
-            })
-            .collect();
-        v["rollout"]["infos"] = infos.into();
     });
     let run = crate::data::Run::load(tmp.path()).unwrap();
     let all = run.rollouts.as_deref().unwrap();
     assert!(all[0].path.is_empty());
     for r in &all[1..] {
-        let s = &r.true_states;
-        assert_eq!(r.path.len(), 2 * s.len() - 1);
-        assert_eq!(r.path[0], (s[0][0], s[0][1]));
-        assert_eq!(
-            r.path[1],
-            ((s[0][0] + s[1][0]) / 2.0, (s[0][1] + s[1][1]) / 2.0)
-        );
-        let last = s.last().unwrap();
-        assert_eq!(*r.path.last().unwrap(), (last[0], last[1]));
+        assert_midpoint_path(&r.true_states, &r.path);
     }
     write_report(tmp.path()).unwrap();
     let n = all.len();
@@ -187,6 +203,39 @@ fn paths_follow_the_within_step_samples_when_every_step_has_them() {
     });
     let err = write_report(tmp.path()).unwrap_err().to_string();
     assert!(err.contains("line 3: rollout.infos[3].path[1]"), "{err}");
+}
+
+/// The fresh starts' y(t) follows their within-step paths as the paths plot does, and its
+/// caption says so.
+#[test]
+fn final_eval_follows_the_within_step_samples() {
+    let tmp = TempDir::new("final-eval-within-step");
+    write_run(tmp.path(), Kind::ViltaVar);
+    write_report(tmp.path()).unwrap();
+    let caption = |dir: &Path| caption_from(dir, "from fresh start positions");
+    assert!(caption(tmp.path()).contains("at the ends of the steps (the run recorded no"));
+
+    let evals = tmp.path().join("final_eval.jsonl");
+    edit_lines(&evals, |_, v| add_midpoint_paths(v));
+    let run = crate::data::Run::load(tmp.path()).unwrap();
+    let all = run.final_eval.as_deref().unwrap();
+    for e in all {
+        assert_midpoint_path(&e.true_states, &e.path);
+    }
+    write_report(tmp.path()).unwrap();
+    assert!(
+        caption(tmp.path()).contains("y(t) of each roll-out, sampled within each step, green"),
+        "{}",
+        caption(tmp.path())
+    );
+
+    edit_lines(&evals, |i, v| {
+        if i == 1 {
+            v["rollout"]["infos"][0]["path"] = serde_json::json!([[0.5, "y"]]);
+        }
+    });
+    let err = write_report(tmp.path()).unwrap_err().to_string();
+    assert!(err.contains("line 2: rollout.infos[0].path[0]"), "{err}");
 }
 
 /// With `final_eval.update` (`vilta.final_policy`) the policy plot and the final evaluation are

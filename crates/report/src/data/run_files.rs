@@ -1,7 +1,7 @@
 //! Reading a run directory's files: JSON and JSON-lines with every error naming the file and
 //! line, and the parsers of each line's record.
 
-use super::{FinalEval, PredStep, Prediction, Rollout, Rows};
+use super::{FinalEval, PathPoint, PredStep, Prediction, Rollout, Rows};
 use crate::json::Node;
 use crate::ReportError;
 use serde_json::Value;
@@ -103,21 +103,10 @@ fn parse_trajectory(r: Node<'_>) -> Result<(Rows, Rows), ReportError> {
 }
 
 pub(super) fn parse_rollout_line(n: Node<'_>) -> Result<Rollout, ReportError> {
-    let (actions, true_states, stopped_early, path) = n.req("rollout", |r| {
+    let (actions, true_states, (stopped_early, path)) = n.req("rollout", |r| {
         let (actions, true_states) = parse_trajectory(r)?;
-        let (stopped_early, path) = r.with("infos", |infos| match infos {
-            None => Ok((None, Vec::new())),
-            Some(infos) => {
-                let steps = infos.map_array(|i| {
-                    let path = i.with("path", |p| p.map(xy_pairs).transpose())?;
-                    Ok((i.opt_string("stopped_early")?, path.unwrap_or_default()))
-                })?;
-                let (mut stopped, paths): (Vec<_>, Vec<_>) = steps.into_iter().unzip();
-                let stopped_early = stopped.pop().flatten();
-                Ok((stopped_early, within_step_path(&true_states, &paths)))
-            }
-        })?;
-        Ok((actions, true_states, stopped_early, path))
+        let infos = parse_infos(r, &true_states)?;
+        Ok((actions, true_states, infos))
     })?;
     Ok(Rollout {
         episode: n.req_u64("episode")?,
@@ -129,6 +118,26 @@ pub(super) fn parse_rollout_line(n: Node<'_>) -> Result<Rollout, ReportError> {
     })
 }
 
+/// From a roll-out's per-step `infos`: why its last step ended early, if it did, and its
+/// within-step path.
+fn parse_infos(
+    r: Node<'_>,
+    true_states: &Rows,
+) -> Result<(Option<String>, Vec<PathPoint>), ReportError> {
+    r.with("infos", |infos| match infos {
+        None => Ok((None, Vec::new())),
+        Some(infos) => {
+            let steps = infos.map_array(|i| {
+                let path = i.with("path", |p| p.map(xy_pairs).transpose())?;
+                Ok((i.opt_string("stopped_early")?, path.unwrap_or_default()))
+            })?;
+            let (mut stopped, paths): (Vec<_>, Vec<_>) = steps.into_iter().unzip();
+            let stopped_early = stopped.pop().flatten();
+            Ok((stopped_early, within_step_path(true_states, &paths)))
+        }
+    })
+}
+
 /// An array of `[x, y]` pairs.
 fn xy_pairs(n: Node<'_>) -> Result<Vec<(f64, f64)>, ReportError> {
     n.map_array(|q| match q.f64_vec()?[..] {
@@ -137,18 +146,31 @@ fn xy_pairs(n: Node<'_>) -> Result<Vec<(f64, f64)>, ReportError> {
     })
 }
 
-/// The start's (x, y) followed by every step's within-step samples, when each step (one info
-/// per true state after the first) has them; otherwise empty, and plots fall back to joining
-/// the steps' true states.
-fn within_step_path(true_states: &Rows, steps: &[Vec<(f64, f64)>]) -> Vec<(f64, f64)> {
+/// The start's (x, y) followed by every step's within-step samples, timed as
+/// [`PathPoint::step`] says, when each step (one info per true state after the first) has
+/// them; otherwise empty, and plots fall back to the steps' true states.
+fn within_step_path(true_states: &Rows, steps: &[Vec<(f64, f64)>]) -> Vec<PathPoint> {
     let start = true_states
         .first()
         .and_then(|s| Some((*s.first()?, *s.get(1)?)));
     let every_step = !steps.is_empty() && steps.len() + 1 == true_states.len();
     match start {
-        Some(start) if every_step && steps.iter().all(|p| !p.is_empty()) => std::iter::once(start)
-            .chain(steps.iter().flatten().copied())
-            .collect(),
+        Some((x, y)) if every_step && steps.iter().all(|p| !p.is_empty()) => {
+            let within = steps.iter().enumerate().flat_map(|(k, samples)| {
+                let n = samples.len() as f64;
+                samples
+                    .iter()
+                    .enumerate()
+                    .map(move |(j, &(x, y))| PathPoint {
+                        step: k as f64 + (j + 1) as f64 / n,
+                        x,
+                        y,
+                    })
+            });
+            std::iter::once(PathPoint { step: 0.0, x, y })
+                .chain(within)
+                .collect()
+        }
         _ => Vec::new(),
     }
 }
@@ -273,8 +295,14 @@ fn parse_step(n: Node<'_>) -> Result<PredStep, ReportError> {
 }
 
 pub(super) fn parse_final_eval(n: Node<'_>) -> Result<FinalEval, ReportError> {
+    let (true_states, (_, path)) = n.req("rollout", |r| {
+        let true_states = r.req("true_states", |s| s.f64_rows())?;
+        let infos = parse_infos(r, &true_states)?;
+        Ok((true_states, infos))
+    })?;
     Ok(FinalEval {
         success: n.req("success", |s| s.bool())?,
-        true_states: n.req("rollout", |r| r.req("true_states", |s| s.f64_rows()))?,
+        true_states,
+        path,
     })
 }

@@ -20,10 +20,10 @@ pub(crate) struct Paths<'a> {
     pub start_y_range: Option<(f64, f64)>,
 }
 
-/// The roll-out's within-step path when it was recorded, else its states 0.1 s apart.
+/// The roll-out's within-step path when it was recorded, else its states a step apart.
 fn xy(r: &Rollout) -> Vec<(f64, f64)> {
     if !r.path.is_empty() {
-        return r.path.clone();
+        return r.path.iter().map(|p| (p.x, p.y)).collect();
     }
     let pts = r.true_states.iter();
     pts.filter_map(|s| Some((*s.first()?, *s.get(1)?)))
@@ -226,6 +226,12 @@ impl Figure for FinalEvalPlot<'_> {
             .evals
             .iter()
             .map(|e| {
+                if !e.path.is_empty() {
+                    return (
+                        e.success,
+                        e.path.iter().map(|p| (p.step * dt, p.y)).collect(),
+                    );
+                }
                 let pts = e.true_states.iter().enumerate();
                 let pts = pts.filter_map(|(k, s)| Some((k as f64 * dt, *s.get(1)?)));
                 (e.success, pts.collect())
