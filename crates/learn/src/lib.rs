@@ -10,6 +10,10 @@
 //! * [`replay`]: where another selection rule would have parted from a recorded run;
 //! * [`start`]: start distributions of the real episodes.
 //!
+//! The whole learning loop on a system of your own (implement [`vicpilco_env::Environment`],
+//! fill in an [`outer::LoopSetup`], call its `run`) is `examples/own_system.rs`:
+//! `cargo run --release -p vicpilco-learn --example own_system`.
+//!
 //! ## Example
 //!
 //! A one-dimensional system that moves by `Δx = 0.1 u` per step, learned by a GP from 49
