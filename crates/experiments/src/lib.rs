@@ -117,8 +117,21 @@ pub enum ExperimentError {
         /// The I/O error (`AlreadyExists` for an output `evaluate` will not overwrite).
         source: std::io::Error,
     },
-    /// `--resume` (or `--replay-from` into a directory that already holds a run) cannot
-    /// continue: no or unreadable checkpoint, another experiment, seed or setting.
+    /// A run that does not resume (a fresh one, or `--replay-from`) was pointed at a directory
+    /// that already holds a run: starting over would discard what that run recorded.
+    #[error(
+        "{} already holds a run ({file}): continue it with --resume (--episodes N for more \
+         updates), or give another --out; delete the directory to start it afresh",
+        dir.display()
+    )]
+    RunExists {
+        /// The run directory.
+        dir: PathBuf,
+        /// The first of the run's files found there, e.g. `checkpoint.json`.
+        file: &'static str,
+    },
+    /// `--resume` cannot continue: no or unreadable checkpoint, another experiment, seed or
+    /// setting.
     #[error("cannot resume from {path}: {message}")]
     Resume {
         /// `checkpoint.json`, or the JSON-lines file with a bad line.
@@ -176,8 +189,8 @@ pub struct RunOptions {
     /// Master seed: every random stream of the run is derived from it and the episode
     /// ([`vicpilco_learn::outer::derive_seed`]), so seed and settings fix the run.
     pub seed: u64,
-    /// The run directory, created if missing; a run that does not resume rewrites its
-    /// JSON-lines files from empty.
+    /// The run directory, created if missing. A run that does not resume refuses one that
+    /// already holds a run ([`ExperimentError::RunExists`]).
     pub out: PathBuf,
     /// Override the number of policy updates.
     pub episodes: Option<usize>,
@@ -240,6 +253,10 @@ pub fn run(
     observer: &mut dyn LoopObserver,
 ) -> Result<Summary, ExperimentError> {
     let cfg = load_config(name, opts.config.as_deref())?;
+    // Before anything is written; `--replay-from` checks in `replay::graft`.
+    if !opts.resume && opts.replay_from.is_none() {
+        refuse_recorded_run(&opts.out)?;
+    }
     std::fs::create_dir_all(&opts.out).map_err(|e| ExperimentError::Io {
         path: opts.out.clone(),
         source: e,
@@ -249,6 +266,25 @@ pub fn run(
         (None, "pendulum") => run_classic(name, PendulumScenario::default(), opts, observer),
         (None, _) => run_classic(name, CartPoleScenario::default(), opts, observer),
     })
+}
+
+/// The JSON-lines files a run directory keeps per update.
+pub(crate) const PER_UPDATE_FILES: [&str; 3] =
+    ["rollouts.jsonl", "predictions.jsonl", "policies.jsonl"];
+
+/// Fails with [`ExperimentError::RunExists`] when `dir` holds any of a run's record files (a
+/// run stopped during its initial roll-out has `rollouts.jsonl` only).
+pub(crate) fn refuse_recorded_run(dir: &Path) -> Result<(), ExperimentError> {
+    let record_files = ["checkpoint.json", "summary.json"]
+        .iter()
+        .chain(PER_UPDATE_FILES.iter());
+    match record_files.into_iter().find(|f| dir.join(f).exists()) {
+        Some(&file) => Err(ExperimentError::RunExists {
+            dir: dir.to_path_buf(),
+            file,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// What a run is, for its summary and checkpoint.

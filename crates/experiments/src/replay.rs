@@ -5,7 +5,7 @@
 
 use crate::record::{Checkpoint, CHECKPOINT_FORMAT};
 use crate::summary::{solved_at, write_json_atomic};
-use crate::ExperimentError;
+use crate::{ExperimentError, PER_UPDATE_FILES};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use vicpilco_learn::data::Rollout;
@@ -33,14 +33,12 @@ pub struct ReplaySource {
     pub updates: Vec<ReplayedUpdate>,
 }
 
-/// The JSON-lines files a run directory keeps per update.
-const PER_UPDATE_FILES: [&str; 3] = ["rollouts.jsonl", "predictions.jsonl", "policies.jsonl"];
-
 /// Replay the run in `source` under `setup` (this run's settings; `identity` as a checkpoint
 /// holds them), write `out`'s checkpoint after the last update both rules agree on and its
 /// per-update files (the caller's resume drops their lines after it), and return that
 /// checkpoint. The source run must be of the same experiment and seed, with the same settings
-/// but `gp.model_selection` (and the number of updates).
+/// but `gp.model_selection` (and the number of updates); `out` must not hold a run yet
+/// ([`ExperimentError::RunExists`]).
 pub fn graft<P>(
     source: &Path,
     experiment: &str,
@@ -54,12 +52,7 @@ where
     P: Policy + Clone + Sync,
     P::Cache: Send,
 {
-    if out.join("checkpoint.json").exists() {
-        return Err(ExperimentError::Resume {
-            path: out.join("checkpoint.json"),
-            message: "the run directory already holds a run (continue it with --resume)".into(),
-        });
-    }
+    crate::refuse_recorded_run(out)?;
     let (recorded, recorded_rule, policies) = open_source(source, experiment, seed, identity)?;
     let replay = setup
         .replay_selection(

@@ -2,7 +2,7 @@
 //! records every episode with finite numbers, and the same seed reproduces it exactly.
 
 use vicpilco_experiments::summary::Summary;
-use vicpilco_experiments::{rescore, run, RecordedRunOptions, RunOptions};
+use vicpilco_experiments::{rescore, run, ExperimentError, RecordedRunOptions, RunOptions};
 use vicpilco_learn::replay::ReplayedUpdate;
 use vicpilco_learn::selection::ModelSelection;
 
@@ -68,7 +68,59 @@ fn pendulum_two_updates_write_a_reproducible_summary() {
             .collect()
     };
     assert_eq!(numbers(&sa), numbers(&sb), "same seed, different result");
+
+    // A fresh run into a directory that holds one refuses before writing anything.
+    let recorded = std::fs::read(a.join("rollouts.jsonl")).unwrap();
+    let again = RunOptions {
+        seed: 8,
+        out: a.clone(),
+        episodes: Some(2),
+        ..Default::default()
+    };
+    let err = run("pendulum", &again, &mut ()).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            ExperimentError::RunExists {
+                file: "checkpoint.json",
+                ..
+            }
+        ),
+        "{err}"
+    );
+    assert!(err.to_string().contains("--resume"), "{err}");
+    assert_eq!(std::fs::read(a.join("rollouts.jsonl")).unwrap(), recorded);
     let _ = std::fs::remove_dir_all(&base);
+}
+
+/// A run stopped during its initial roll-out leaves `rollouts.jsonl` alone; a fresh run there
+/// refuses too, naming it, as does a replay into it.
+#[test]
+fn a_directory_with_any_record_file_is_not_started_over() {
+    let dir = std::env::temp_dir().join(format!("vicpilco-partial-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("rollouts.jsonl"), "").unwrap();
+    let fresh = RunOptions {
+        seed: 1,
+        out: dir.clone(),
+        quick: true,
+        ..Default::default()
+    };
+    let err = run("vil-gic", &fresh, &mut ()).unwrap_err().to_string();
+    assert!(
+        err.contains("already holds a run (rollouts.jsonl)"),
+        "{err}"
+    );
+    let replay = RunOptions {
+        replay_from: Some(dir.join("elsewhere")),
+        ..fresh
+    };
+    let err = run("vil-gic", &replay, &mut ()).unwrap_err().to_string();
+    assert!(
+        err.contains("already holds a run (rollouts.jsonl)"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
