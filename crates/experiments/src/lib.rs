@@ -275,10 +275,10 @@ pub(crate) const PER_UPDATE_FILES: [&str; 3] =
 /// Fails with [`ExperimentError::RunExists`] when `dir` holds any of a run's record files (a
 /// run stopped during its initial roll-out has `rollouts.jsonl` only).
 pub(crate) fn refuse_recorded_run(dir: &Path) -> Result<(), ExperimentError> {
-    let record_files = ["checkpoint.json", "summary.json"]
+    let mut record_files = ["checkpoint.json", "summary.json"]
         .iter()
         .chain(PER_UPDATE_FILES.iter());
-    match record_files.into_iter().find(|f| dir.join(f).exists()) {
+    match record_files.find(|f| dir.join(f).exists()) {
         Some(&file) => Err(ExperimentError::RunExists {
             dir: dir.to_path_buf(),
             file,
