@@ -367,13 +367,18 @@ mod tests {
     }
 
     #[test]
-    fn bad_actions_are_errors_not_clipped() {
+    fn bad_actions_and_steps_past_the_horizon_are_errors() {
         let mut env = SpringMass::new();
         assert!(matches!(env.step(&[100.0]), Err(EnvError::NotReset)));
         env.reset(&[0.0, 0.0], 3).expect("valid start");
         assert!(env.step(&[-1.0]).is_err());
         assert!(env.step(&[f64::NAN]).is_err());
         assert!(env.step(&[1.0, 2.0]).is_err());
-        assert!(env.step(&[100.0]).is_ok());
+        let steps: Vec<Step> = (0..HORIZON).map(|_| env.step(&[100.0]).unwrap()).collect();
+        assert!(steps[..HORIZON - 1].iter().all(|s| !s.done) && steps[HORIZON - 1].done);
+        assert!(matches!(
+            env.step(&[100.0]),
+            Err(EnvError::EpisodeOver { .. })
+        ));
     }
 }
