@@ -18,7 +18,8 @@
 //!   after every update.
 //!
 //! Experiments: `pendulum` and `cartpole` (PILCO's swing-ups, [`classic`]), and the thesis's
-//! peg-in-hole runs configured by `experiments/*.toml` ([`config`], [`arm`]).
+//! peg-in-hole runs configured by `experiments/*.toml` ([`config`], [`arm`]). A system of your
+//! own gets the same run directory from [`own::run_own`] (`examples/own_system.rs`).
 //!
 //! ## Example
 //!
@@ -53,6 +54,7 @@ pub mod checks;
 pub mod classic;
 pub mod config;
 pub mod evaluate;
+pub mod own;
 pub mod recheck;
 pub mod record;
 pub mod replay;
@@ -130,6 +132,10 @@ pub enum ExperimentError {
         /// The first of the run's files found there, e.g. `checkpoint.json`.
         file: &'static str,
     },
+    /// [`own::run_own`] was given options or a name that belong to the named experiments, or
+    /// a seed other than its setup's.
+    #[error("run of a system of your own: {0}")]
+    OwnRun(String),
     /// `--resume` cannot continue: no or unreadable checkpoint, another experiment, seed or
     /// setting.
     #[error("cannot resume from {path}: {message}")]
@@ -253,18 +259,23 @@ pub fn run(
     observer: &mut dyn LoopObserver,
 ) -> Result<Summary, ExperimentError> {
     let cfg = load_config(name, opts.config.as_deref())?;
-    // Before anything is written; `--replay-from` checks in `replay::graft`.
+    prepare_out(opts)?;
+    subnormals::run_flushed(|| match (cfg, name) {
+        (Some(cfg), _) => run_arm(name, cfg, opts, observer),
+        (None, "pendulum") => run_classic(name, PendulumScenario::default(), opts, observer),
+        (None, _) => run_classic(name, CartPoleScenario::default(), opts, observer),
+    })
+}
+
+/// Creates the run directory; a fresh run first refuses one that holds a run, before anything
+/// is written (`--replay-from` checks in [`replay::graft`]).
+pub(crate) fn prepare_out(opts: &RunOptions) -> Result<(), ExperimentError> {
     if !opts.resume && opts.replay_from.is_none() {
         refuse_recorded_run(&opts.out)?;
     }
     std::fs::create_dir_all(&opts.out).map_err(|e| ExperimentError::Io {
         path: opts.out.clone(),
         source: e,
-    })?;
-    subnormals::run_flushed(|| match (cfg, name) {
-        (Some(cfg), _) => run_arm(name, cfg, opts, observer),
-        (None, "pendulum") => run_classic(name, PendulumScenario::default(), opts, observer),
-        (None, _) => run_classic(name, CartPoleScenario::default(), opts, observer),
     })
 }
 
@@ -288,7 +299,7 @@ pub(crate) fn refuse_recorded_run(dir: &Path) -> Result<(), ExperimentError> {
 }
 
 /// What a run is, for its summary and checkpoint.
-struct RunMeta<'a> {
+pub(crate) struct RunMeta<'a> {
     /// Every setting, for `summary.json`.
     config: serde_json::Value,
     /// The settings a resumed run must share (all but the number of updates).
@@ -491,7 +502,7 @@ pub fn rescore(
 }
 
 /// Run (or resume) the loop with a [`Recorder`] and write the final files.
-fn finish<P>(
+pub(crate) fn finish<P>(
     name: &str,
     opts: &RunOptions,
     setup: LoopSetup<P>,

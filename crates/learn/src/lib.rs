@@ -10,9 +10,10 @@
 //! * [`replay`]: where another selection rule would have parted from a recorded run;
 //! * [`start`]: start distributions of the real episodes.
 //!
-//! The whole learning loop on a system of your own (implement [`vicpilco_env::Environment`],
-//! fill in an [`outer::LoopSetup`], call its `run`) is `examples/own_system.rs`:
-//! `cargo run --release -p vicpilco-learn --example own_system`.
+//! The whole learning loop on a system of your own: implement [`vicpilco_env::Environment`],
+//! fill in an [`outer::LoopSetup`] and call its `run`, or hand both to
+//! `vicpilco_experiments::own::run_own` for a run directory with checkpoints and a report
+//! (`cargo run --release -p vicpilco-experiments --example own_system`).
 //!
 //! ## Example
 //!

@@ -1,5 +1,6 @@
 //! Learning a variable stiffness on a system of your own: the whole path from an
-//! [`Environment`] implementation to a learned policy, with nothing from the thesis's configs.
+//! [`Environment`] implementation and a [`LoopSetup`] to a run directory with checkpoints and
+//! a report, with nothing from the thesis's configs.
 //!
 //! The system is a 1 kg mass on a rail, pulled towards `x_ref = 0.2 m` by a spring of
 //! stiffness `k` (the action, N/m) and slowed by a fixed damper of 4 N·s/m, as an impedance
@@ -10,19 +11,26 @@
 //! soft once arrived, where a spring at rest does nothing but cost.
 //!
 //! ```sh
-//! cargo run --release -p vicpilco-learn --example own_system [-- UPDATES [SEED]]
+//! cargo run --release -p vicpilco-experiments --example own_system -- [UPDATES [SEED]] [--out DIR] [--resume]
 //! ```
 //!
 //! Prints one line per policy update (predicted and recorded return, arrival) and the learned
-//! stiffness profile against the initial random one. The example's tests run the same problem
-//! for three updates (`cargo test --release -p vicpilco-learn --example own_system`).
+//! stiffness profile against the initial random one, and writes the run directory (default
+//! `runs/own-system-seed<SEED>`) with [`run_own`]: `summary.json`, the JSON-lines records,
+//! `checkpoint.json` (`--resume` continues a stopped run, or one asked for more updates) and
+//! `report.html`. The example's tests run the same problem for a few updates
+//! (`cargo test --release -p vicpilco-experiments --example own_system`).
 
 use faer::Mat;
 use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 use std::collections::BTreeMap;
 use std::error::Error;
+use std::path::PathBuf;
 use vicpilco_env::{EnvError, Environment, Step, StepInfo};
+use vicpilco_experiments::own::run_own;
+use vicpilco_experiments::summary::Summary;
+use vicpilco_experiments::RunOptions;
 use vicpilco_gp::train::Wolfe;
 use vicpilco_gp::DynamicsOptions;
 use vicpilco_learn::data::Rollout;
@@ -52,6 +60,24 @@ const ENERGY_WEIGHT: f64 = 0.5;
 /// Seed purpose of the policy's random initialisation ([`derive_seed`]'s third argument; the
 /// loop's own purposes are 1–3 and 100 up).
 const PURPOSE_POLICY_INIT: u64 = 11;
+/// Basis functions of the RBF stiffness policy.
+const N_BASIS: usize = 10;
+/// Where their centres are drawn from, uniformly: x (m) and ẋ (m/s). This covers most states
+/// the mass passes through: up to 0.3 m (a constant 250 N/m spring overshoots to 0.33) and up
+/// to 2 m/s (it peaks at 2.6). Centres where the policy is never evaluated would have no
+/// gradient to move them.
+const CENTRE_RANGES: [[f64; 2]; 2] = [[0.0, 0.3], [-1.0, 2.0]];
+/// Their initial length-scales on (x, ẋ).
+const POLICY_LENGTHSCALES: [f64; 2] = [0.05, 0.5];
+/// Std of the initial pseudo-targets (PILCO's 0.1) and the policy's signal-to-noise ratio.
+const POLICY_INIT_STD: f64 = 0.1;
+const POLICY_SNR: f64 = 100.0;
+/// Start variance of x and ẋ: the mass starts at rest at 0, and the small spread keeps the
+/// first prediction's covariance regular.
+const START_VARIANCE: f64 = 1e-6;
+/// PILCO's function evaluations per line search, and the L-BFGS memory.
+const MFEPLS: u64 = 25;
+const LBFGS_MEMORY: usize = 10;
 /// Arrival: at the end, within this distance of `X_REF` (m) and below this speed (m/s).
 const ARRIVAL_DISTANCE: f64 = 0.01;
 const ARRIVAL_SPEED: f64 = 0.05;
@@ -186,6 +212,37 @@ fn arrived(state: &[f64]) -> bool {
     (state[0] - X_REF).abs() < ARRIVAL_DISTANCE && state[1].abs() < ARRIVAL_SPEED
 }
 
+/// Everything the run is set up with, for its `summary.json` (a resume must match it).
+fn settings(length: u64) -> serde_json::Value {
+    let system = SpringMass::new();
+    serde_json::json!({
+        "system": {
+            "mass": system.mass,
+            "damping": system.damping,
+            "noise_std": system.noise_std,
+            "substeps": system.substeps,
+            "x_ref": X_REF,
+        },
+        "dt": DT,
+        "horizon": HORIZON,
+        "start_variance": START_VARIANCE,
+        "policy": {
+            "kind": "rbf",
+            "n_basis": N_BASIS,
+            "centre_ranges": CENTRE_RANGES,
+            "lengthscales": POLICY_LENGTHSCALES,
+            "init_std": POLICY_INIT_STD,
+            "snr": POLICY_SNR,
+            "k_min": K_MIN,
+            "k_max": K_MAX,
+        },
+        "cost": { "width": COST_WIDTH, "w_energy": ENERGY_WEIGHT },
+        "gp": { "model_selection": "likelihood", "sparse_threshold": DynamicsOptions::default().sparse_threshold },
+        "optimiser": { "length": length, "mfepls": MFEPLS, "memory": LBFGS_MEMORY },
+        "arrival": { "distance": ARRIVAL_DISTANCE, "speed": ARRIVAL_SPEED },
+    })
+}
+
 /// The learning problem: GP inputs (x, ẋ, k) with increments of (x, ẋ) as targets, an RBF
 /// policy on (x, ẋ) saturated onto [K_MIN, K_MAX], `updates` policy updates of `length` line
 /// searches each after one roll-out of random stiffness.
@@ -220,24 +277,20 @@ fn problem(updates: usize, length: u64, seed: u64) -> Result<LoopSetup<RbfPolicy
         }],
     )?;
 
-    // Ten basis functions spread over most states the mass passes through: up to 0.3 m (a
-    // constant 250 N/m spring overshoots to 0.33) and up to 2 m/s (it peaks at 2.6). Centres
-    // where the policy is never evaluated would have no gradient to move them.
     let mut rng = rand::rngs::ChaCha8Rng::seed_from_u64(derive_seed(seed, 0, PURPOSE_POLICY_INIT));
-    let centres = Mat::from_fn(10, 2, |_, j| match j {
-        0 => rng.random_range(0.0..X_REF * 1.5),
-        _ => rng.random_range(-1.0..2.0),
+    let centres = Mat::from_fn(N_BASIS, 2, |_, j| {
+        let [lo, hi] = CENTRE_RANGES[j];
+        rng.random_range(lo..hi)
     });
-    let targets = Mat::from_fn(10, 1, |_, _| {
+    let targets = Mat::from_fn(N_BASIS, 1, |_, _| {
         let z: f64 = StandardNormal.sample(&mut rng);
-        0.1 * z
+        POLICY_INIT_STD * z
     });
-    let log_ls = Mat::from_fn(2, 1, |j, _| [0.05_f64, 0.5][j].ln());
-    let policy = RbfPolicy::new(centres, targets, log_ls.as_ref(), 100.0)?;
+    let log_ls = Mat::from_fn(2, 1, |j, _| POLICY_LENGTHSCALES[j].ln());
+    let policy = RbfPolicy::new(centres, targets, log_ls.as_ref(), POLICY_SNR)?;
 
-    // At rest at x = 0; the small spread keeps the first prediction's covariance regular.
     let start = vec![0.0, 0.0];
-    let start_cov = Mat::from_fn(2, 2, |i, j| if i == j { 1e-6 } else { 0.0 });
+    let start_cov = Mat::from_fn(2, 2, |i, j| if i == j { START_VARIANCE } else { 0.0 });
     Ok(LoopSetup {
         spec,
         squash: Some(squash),
@@ -252,8 +305,8 @@ fn problem(updates: usize, length: u64, seed: u64) -> Result<LoopSetup<RbfPolicy
         model_selection: ModelSelection::Likelihood,
         optimiser: OptimiserOptions {
             length,
-            mfepls: 25,
-            memory: 10,
+            mfepls: MFEPLS,
+            memory: LBFGS_MEMORY,
             wolfe: Wolfe::PILCO,
             scale_params: None,
         },
@@ -270,56 +323,103 @@ fn problem(updates: usize, length: u64, seed: u64) -> Result<LoopSetup<RbfPolicy
     })
 }
 
-/// Prints the initial roll-out's return and each update's, and keeps the initial one.
-#[derive(Default)]
-struct Progress {
-    quiet: bool,
-    initial_return: Option<f64>,
-}
+/// Prints the initial roll-out's return and each update as it finishes.
+struct Printer;
 
-impl LoopObserver for Progress {
+impl LoopObserver for Printer {
     fn rollout_done(&mut self, episode: usize, _rollout: &Rollout, costs: &[f64]) {
         if episode == 0 {
             let recorded: f64 = costs.iter().sum();
-            self.initial_return = Some(recorded);
-            if !self.quiet {
-                println!("initial roll-out (random stiffness): recorded {recorded:6.2}");
-            }
+            println!("initial roll-out (random stiffness): recorded {recorded:6.2}");
         }
     }
 
     fn episode_done(&mut self, r: &EpisodeRecord) {
-        if !self.quiet {
-            println!(
-                "update {:2}: predicted {:6.2} ± {:5.2}, recorded {:6.2}, {}",
-                r.index,
-                r.predicted_return_mean,
-                r.predicted_return_std,
-                r.recorded_return,
-                if r.success { "arrived" } else { "not arrived" }
-            );
-        }
+        println!(
+            "update {:2}: predicted {:6.2} ± {:5.2}, recorded {:6.2}, {}",
+            r.index,
+            r.predicted_return_mean,
+            r.predicted_return_std,
+            r.recorded_return,
+            if r.success { "arrived" } else { "not arrived" }
+        );
     }
 }
 
+/// Line searches per policy update.
+const LENGTH: u64 = 30;
+
+/// Learn for `updates` updates from `seed` into `out` (or continue the run there).
+fn learn(
+    updates: usize,
+    seed: u64,
+    out: PathBuf,
+    resume: bool,
+    observer: &mut dyn LoopObserver,
+) -> Result<Summary, Box<dyn Error>> {
+    let opts = RunOptions {
+        seed,
+        out,
+        episodes: Some(updates),
+        resume,
+        ..RunOptions::default()
+    };
+    let setup = problem(updates, LENGTH, seed)?;
+    Ok(run_own(
+        "own-system",
+        setup,
+        &mut SpringMass::new(),
+        settings(LENGTH),
+        &opts,
+        observer,
+    )?)
+}
+
+/// The first and the last learned roll-out's stiffness per step, read back from the run's
+/// `rollouts.jsonl` (initial roll-out first).
+fn first_and_last_gains(out: &std::path::Path) -> Result<(Vec<f64>, Vec<f64>), Box<dyn Error>> {
+    let text = std::fs::read_to_string(out.join("rollouts.jsonl"))?;
+    let gains = |line: &str| -> Result<Vec<f64>, Box<dyn Error>> {
+        let v: serde_json::Value = serde_json::from_str(line)?;
+        let actions = v["rollout"]["actions"].as_array().ok_or("no actions")?;
+        actions
+            .iter()
+            .map(|a| a[0].as_f64().ok_or_else(|| "a non-numeric action".into()))
+            .collect()
+    };
+    let first = text.lines().next().ok_or("no roll-out recorded")?;
+    let last = text.lines().last().ok_or("no roll-out recorded")?;
+    Ok((gains(first)?, gains(last)?))
+}
+
 fn main() -> Result<(), Box<dyn Error>> {
+    // Before anything starts rayon's global pool (building the policy does): the pool's
+    // threads then flush subnormals to zero, as the named runs' do (BENCHMARKS.md).
+    vicpilco_experiments::subnormals::pool_flushes();
+    let (mut numbers, mut out, mut resume) = (Vec::new(), None, false);
     let mut args = std::env::args().skip(1);
-    let updates: usize = args.next().map_or(Ok(6), |a| a.parse())?;
-    let seed: u64 = args.next().map_or(Ok(1), |a| a.parse())?;
-    let outcome =
-        problem(updates, 30, seed)?.run(&mut SpringMass::new(), &mut Progress::default())?;
-    let initial = &outcome.initial[0];
-    let last = outcome.rollouts.last().ok_or("no update ran")?;
-    println!("  t [s]   k random   k learned [N/m]   x learned [m]");
+    while let Some(arg) = args.next() {
+        match arg.as_str() {
+            "--resume" => resume = true,
+            "--out" => out = Some(PathBuf::from(args.next().ok_or("--out needs a directory")?)),
+            _ => numbers.push(arg),
+        }
+    }
+    let updates: usize = numbers.first().map_or(Ok(6), |a| a.parse())?;
+    let seed: u64 = numbers.get(1).map_or(Ok(1), |a| a.parse())?;
+    let out = out.unwrap_or_else(|| PathBuf::from(format!("runs/own-system-seed{seed}")));
+    learn(updates, seed, out.clone(), resume, &mut Printer)?;
+    let (random, learned) = first_and_last_gains(&out)?;
+    println!("  t [s]   k random   k learned [N/m]");
     for t in (0..HORIZON).step_by(2) {
         println!(
-            "  {:4.1}   {:8.1}   {:15.1}   {:13.3}",
+            "  {:4.1}   {:8.1}   {:15.1}",
             t as f64 * DT,
-            initial.actions[t][0],
-            last.actions[t][0],
-            last.true_states[t + 1][0]
+            random[t],
+            learned[t]
         );
     }
+    println!("wrote {} (report.html)", out.display());
     Ok(())
 }
 
@@ -327,43 +427,105 @@ fn main() -> Result<(), Box<dyn Error>> {
 mod tests {
     use super::*;
 
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("vicpilco-own-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        dir
+    }
+
     /// Three updates at least halve the random stiffness's return, the learned policy is
     /// stiffer on the way than once arrived, and its gains stay in range. (Seeds 1–8 when this
-    /// was written: returns 2.2–4.4 against 8.4–13.2; 50–110 N/m over the first 0.5 s against
-    /// 6–56 N/m over the last second.)
+    /// was written: returns 2.1–4.2 against 8.4–13.2; 50–113 N/m over the first 0.5 s against
+    /// 5–57 N/m over the last second.) The run directory has its report.
     #[test]
     fn three_updates_beat_random_stiffness_and_soften_on_arrival() {
-        let mut progress = Progress {
-            quiet: true,
-            ..Progress::default()
-        };
-        let outcome = problem(3, 30, 1)
-            .expect("valid problem")
-            .run(&mut SpringMass::new(), &mut progress)
-            .expect("the loop runs");
-        assert_eq!(outcome.episodes.len(), 3);
-        let random = progress.initial_return.expect("initial roll-out recorded");
-        let learned = outcome
-            .episodes
-            .last()
-            .expect("three updates")
-            .recorded_return;
+        let out = scratch("three");
+        let summary = learn(3, 1, out.clone(), false, &mut ()).expect("the run");
+        assert_eq!(summary.episodes.len(), 3);
+        let random = summary.initial_return.expect("initial roll-out recorded");
+        let learned = summary.episodes[2].record.recorded_return;
         assert!(
             learned < 0.5 * random,
             "learned {learned} against random {random}"
         );
-        let last = outcome.rollouts.last().expect("rolled out");
+        let (_, last) = first_and_last_gains(&out).expect("rollouts.jsonl");
         let mean_k = |steps: std::ops::Range<usize>| {
             let n = steps.len() as f64;
-            steps.map(|t| last.actions[t][0]).sum::<f64>() / n
+            steps.map(|t| last[t]).sum::<f64>() / n
         };
         let (on_the_way, arrived) = (mean_k(0..5), mean_k(HORIZON - 10..HORIZON));
         assert!(
             on_the_way > arrived,
             "k {on_the_way} N/m over the first 0.5 s against {arrived} N/m over the last 1 s"
         );
-        let gains = outcome.rollouts.iter().flat_map(|r| &r.actions);
-        assert!(gains.clone().all(|a| (K_MIN..=K_MAX).contains(&a[0])));
+        assert!(last.iter().all(|k| (K_MIN..=K_MAX).contains(k)));
+        for file in [
+            "report.html",
+            "checkpoint.json",
+            "policy.json",
+            "returns.png",
+        ] {
+            assert!(out.join(file).is_file(), "no {file}");
+        }
+        let _ = std::fs::remove_dir_all(&out);
+    }
+
+    /// Two updates, then a resume to three, record what three updates in one go record.
+    #[test]
+    fn a_resumed_run_equals_the_uninterrupted_one() {
+        let (stopped, whole) = (scratch("stopped"), scratch("whole"));
+        learn(2, 2, stopped.clone(), false, &mut ()).expect("first part");
+        let resumed = learn(3, 2, stopped.clone(), true, &mut ()).expect("resumed");
+        let uninterrupted = learn(3, 2, whole.clone(), false, &mut ()).expect("uninterrupted");
+        let numbers = |s: &Summary| -> Vec<[f64; 3]> {
+            s.episodes
+                .iter()
+                .map(|e| {
+                    let r = &e.record;
+                    [
+                        r.predicted_return_mean,
+                        r.predicted_return_std,
+                        r.recorded_return,
+                    ]
+                })
+                .collect()
+        };
+        assert_eq!(numbers(&resumed), numbers(&uninterrupted));
+        for file in ["policies.jsonl", "rollouts.jsonl"] {
+            let read = |dir: &PathBuf| std::fs::read_to_string(dir.join(file)).unwrap();
+            assert_eq!(read(&stopped), read(&whole), "{file}");
+        }
+        // Starting afresh over it is refused; so are the named experiments' names and options.
+        let err = learn(3, 2, stopped.clone(), false, &mut ()).unwrap_err();
+        assert!(err.to_string().contains("already holds a run"), "{err}");
+        let refused = |name: &str, opts: RunOptions| {
+            let setup = problem(1, LENGTH, 2).unwrap();
+            run_own(
+                name,
+                setup,
+                &mut SpringMass::new(),
+                settings(LENGTH),
+                &opts,
+                &mut (),
+            )
+            .unwrap_err()
+            .to_string()
+        };
+        let fresh = RunOptions {
+            seed: 2,
+            out: scratch("refused"),
+            ..RunOptions::default()
+        };
+        assert!(refused("vil-gic", fresh.clone()).contains("shipped experiment"));
+        let quick = RunOptions {
+            quick: true,
+            ..fresh.clone()
+        };
+        assert!(refused("own-system", quick).contains("quick"));
+        let other_seed = RunOptions { seed: 3, ..fresh };
+        assert!(refused("own-system", other_seed).contains("seed 3"));
+        let _ = std::fs::remove_dir_all(&stopped);
+        let _ = std::fs::remove_dir_all(&whole);
     }
 
     #[test]
