@@ -63,7 +63,9 @@ pub mod summary;
 pub mod summary_config;
 
 use config::{ArmExperiment, FinalPolicy, PolicyKind};
-use record::{open_jsonl, read_checkpoint, ClaimsOf, PredictionLabels, Recorder, RolloutExtras};
+use record::{
+    open_jsonl, prepare_out, read_checkpoint, ClaimsOf, PredictionLabels, Recorder, RolloutExtras,
+};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use summary::{write_json_atomic, RunSession, Summary};
@@ -265,37 +267,6 @@ pub fn run(
         (None, "pendulum") => run_classic(name, PendulumScenario::default(), opts, observer),
         (None, _) => run_classic(name, CartPoleScenario::default(), opts, observer),
     })
-}
-
-/// Creates the run directory; a fresh run first refuses one that holds a run, before anything
-/// is written (`--replay-from` checks in [`replay::graft`]).
-pub(crate) fn prepare_out(opts: &RunOptions) -> Result<(), ExperimentError> {
-    if !opts.resume && opts.replay_from.is_none() {
-        refuse_recorded_run(&opts.out)?;
-    }
-    std::fs::create_dir_all(&opts.out).map_err(|e| ExperimentError::Io {
-        path: opts.out.clone(),
-        source: e,
-    })
-}
-
-/// The JSON-lines files a run directory keeps per update.
-pub(crate) const PER_UPDATE_FILES: [&str; 3] =
-    ["rollouts.jsonl", "predictions.jsonl", "policies.jsonl"];
-
-/// Fails with [`ExperimentError::RunExists`] when `dir` holds any of a run's record files (a
-/// run stopped during its initial roll-out has `rollouts.jsonl` only).
-pub(crate) fn refuse_recorded_run(dir: &Path) -> Result<(), ExperimentError> {
-    let mut record_files = ["checkpoint.json", "summary.json"]
-        .iter()
-        .chain(PER_UPDATE_FILES.iter());
-    match record_files.find(|f| dir.join(f).exists()) {
-        Some(&file) => Err(ExperimentError::RunExists {
-            dir: dir.to_path_buf(),
-            file,
-        }),
-        None => Ok(()),
-    }
 }
 
 /// What a run is, for its summary and checkpoint.

@@ -2,8 +2,9 @@
 //! [`LoopSetup`] on any [`Environment`], recorded as the named experiments record theirs, so
 //! checkpoints, `resume` and `vicpilco report` work for it too.
 
+use crate::record::prepare_out;
 use crate::summary::Summary;
-use crate::{experiment_names, finish, prepare_out, subnormals, ExperimentError, RunMeta};
+use crate::{experiment_names, finish, subnormals, ExperimentError, RunMeta};
 use crate::{RunOptions, QUICK_EPISODES};
 use vicpilco_env::Environment;
 use vicpilco_learn::outer::LoopSetup;

@@ -13,7 +13,7 @@
 //!   the episode, so no generator state is needed to continue bit for bit.
 
 use crate::summary::{colour, solved_at, write_json_atomic, EpisodeSummary, Summary};
-use crate::ExperimentError;
+use crate::{ExperimentError, RunOptions};
 use serde::{Deserialize, Serialize};
 use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
@@ -108,6 +108,37 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ExperimentError + '_ {
     move |e| ExperimentError::Io {
         path: path.to_path_buf(),
         source: e,
+    }
+}
+
+/// Creates the run directory; a fresh run first refuses one that holds a run, before anything
+/// is written (`--replay-from` checks in [`crate::replay::graft`]).
+pub(crate) fn prepare_out(opts: &RunOptions) -> Result<(), ExperimentError> {
+    if !opts.resume && opts.replay_from.is_none() {
+        refuse_recorded_run(&opts.out)?;
+    }
+    std::fs::create_dir_all(&opts.out).map_err(|e| ExperimentError::Io {
+        path: opts.out.clone(),
+        source: e,
+    })
+}
+
+/// The JSON-lines files a run directory keeps per update.
+pub(crate) const PER_UPDATE_FILES: [&str; 3] =
+    ["rollouts.jsonl", "predictions.jsonl", "policies.jsonl"];
+
+/// Fails with [`ExperimentError::RunExists`] when `dir` holds any of a run's record files (a
+/// run stopped during its initial roll-out has `rollouts.jsonl` only).
+pub(crate) fn refuse_recorded_run(dir: &Path) -> Result<(), ExperimentError> {
+    let mut record_files = ["checkpoint.json", "summary.json"]
+        .iter()
+        .chain(PER_UPDATE_FILES.iter());
+    match record_files.find(|f| dir.join(f).exists()) {
+        Some(&file) => Err(ExperimentError::RunExists {
+            dir: dir.to_path_buf(),
+            file,
+        }),
+        None => Ok(()),
     }
 }
 

@@ -3,9 +3,10 @@
 //! chooses the same models ([`vicpilco_learn::replay`]), and the run continues from the first
 //! update where the rules part, as if it had run from the start.
 
+use crate::record::{refuse_recorded_run, PER_UPDATE_FILES};
 use crate::record::{Checkpoint, CHECKPOINT_FORMAT};
 use crate::summary::{solved_at, write_json_atomic};
-use crate::{ExperimentError, PER_UPDATE_FILES};
+use crate::ExperimentError;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use vicpilco_learn::data::Rollout;
@@ -52,7 +53,7 @@ where
     P: Policy + Clone + Sync,
     P::Cache: Send,
 {
-    crate::refuse_recorded_run(out)?;
+    refuse_recorded_run(out)?;
     let (recorded, recorded_rule, policies) = open_source(source, experiment, seed, identity)?;
     let replay = setup
         .replay_selection(
