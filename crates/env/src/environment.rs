@@ -25,9 +25,11 @@ pub trait Environment {
     fn dt(&self) -> f64;
     /// Number of learning steps in one episode (the horizon H); `step` number `H` sets `done`.
     fn horizon(&self) -> usize;
-    /// Names of the state entries, in order (for files, plots and logs).
+    /// Names of the state entries, in order (for files, plots and logs). `vicpilco report`
+    /// knows the arm's and the swing-ups' names and units; any other name may end in its unit,
+    /// as `"z [m]"`, which the plots show as the unit.
     fn state_names(&self) -> Vec<String>;
-    /// Names of the action entries, in order.
+    /// Names of the action entries, in order (units as for [`Environment::state_names`]).
     fn action_names(&self) -> Vec<String>;
     /// Starts an episode at `start` (a state of length `state_dim`, drawn by the caller from its
     /// start distribution) with sensor noise seeded by `seed`. Returns the first (noisy)

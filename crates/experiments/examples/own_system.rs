@@ -133,7 +133,8 @@ impl Environment for SpringMass {
         vec!["x".into(), "xd".into()]
     }
     fn action_names(&self) -> Vec<String> {
-        vec!["k".into()]
+        // The report shows a trailing " [unit]" as the unit ("x" and "xd" it knows).
+        vec!["k [N/m]".into()]
     }
 
     fn reset(&mut self, start: &[f64], seed: u64) -> Result<Vec<f64>, EnvError> {

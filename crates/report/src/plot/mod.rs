@@ -450,26 +450,38 @@ pub(crate) fn std_of(var: f64) -> f64 {
 }
 
 /// How a state or action name is shown, and its unit if known. The run files use both the
-/// simulator's short names (`xd`, `fx`) and spelled-out ones (`xdot`, `f_x`).
-pub(crate) fn pretty(name: &str) -> (String, Option<&'static str>) {
-    let (shown, unit) = match name {
-        "x" | "y" => (name, Some("m")),
-        "xd" | "xdot" => ("ẋ", Some("m/s")),
-        "yd" | "ydot" => ("ẏ", Some("m/s")),
-        "fx" | "f_x" => ("f_x", Some("N")),
-        "fy" | "f_y" => ("f_y", Some("N")),
-        "k_x" | "kx" => ("k_x", Some("N/m")),
-        "k_y" | "ky" => ("k_y", Some("N/m")),
-        "dx_ref" => ("Δx_ref", Some("m")),
-        "dy_ref" => ("Δy_ref", Some("m")),
-        "theta" => ("θ", Some("rad")),
-        "dtheta" => ("dθ/dt", Some("rad/s")),
-        "v" => ("v", Some("m/s")),
-        "torque" => ("torque", Some("N m")),
-        "force" => ("force", Some("N")),
-        other => (other, None),
+/// simulator's short names (`xd`, `fx`) and spelled-out ones (`xdot`, `f_x`); any other name
+/// may carry its unit as a trailing ` [unit]` (a system of one's own: `k [N/m]`).
+pub(crate) fn pretty(name: &str) -> (String, Option<String>) {
+    let known = match name {
+        "x" | "y" => Some((name, "m")),
+        "xd" | "xdot" => Some(("ẋ", "m/s")),
+        "yd" | "ydot" => Some(("ẏ", "m/s")),
+        "fx" | "f_x" => Some(("f_x", "N")),
+        "fy" | "f_y" => Some(("f_y", "N")),
+        "k_x" | "kx" => Some(("k_x", "N/m")),
+        "k_y" | "ky" => Some(("k_y", "N/m")),
+        "dx_ref" => Some(("Δx_ref", "m")),
+        "dy_ref" => Some(("Δy_ref", "m")),
+        "theta" => Some(("θ", "rad")),
+        "dtheta" => Some(("dθ/dt", "rad/s")),
+        "v" => Some(("v", "m/s")),
+        "torque" => Some(("torque", "N m")),
+        "force" => Some(("force", "N")),
+        _ => None,
     };
-    (shown.to_string(), unit)
+    if let Some((shown, unit)) = known {
+        return (shown.to_string(), Some(unit.to_string()));
+    }
+    match name
+        .strip_suffix(']')
+        .and_then(|rest| rest.rsplit_once(" ["))
+    {
+        Some((shown, unit)) if !shown.is_empty() && !unit.is_empty() => {
+            (shown.to_string(), Some(unit.to_string()))
+        }
+        _ => (name.to_string(), None),
+    }
 }
 
 /// "name [unit]" for an axis description.
@@ -574,6 +586,19 @@ mod tests {
         let (t, y) = stairs(0.0, 0.5, &[1.0, 2.0]);
         assert_eq!(t, [0.0, 0.5, 0.5, 1.0]);
         assert_eq!(y, [1.0, 1.0, 2.0, 2.0]);
+    }
+
+    #[test]
+    fn axis_labels_know_the_arms_names_and_read_a_units_suffix() {
+        assert_eq!(axis_label("xd"), "ẋ [m/s]");
+        assert_eq!(axis_label("k [N/m]"), "k [N/m]");
+        assert_eq!(
+            pretty("k [N/m]"),
+            ("k".to_string(), Some("N/m".to_string()))
+        );
+        for bare in ["k", "[N/m]", "k []", "k [N/m"] {
+            assert_eq!(pretty(bare), (bare.to_string(), None), "{bare}");
+        }
     }
 
     #[test]
