@@ -496,9 +496,28 @@ mod tests {
             let read = |dir: &PathBuf| std::fs::read_to_string(dir.join(file)).unwrap();
             assert_eq!(read(&stopped), read(&whole), "{file}");
         }
-        // Starting afresh over it is refused; so are the named experiments' names and options.
+        // Starting afresh over it is refused, and so is resuming it with other settings; so
+        // are the named experiments' names and options.
         let err = learn(3, 2, stopped.clone(), false, &mut ()).unwrap_err();
         assert!(err.to_string().contains("already holds a run"), "{err}");
+        let other_settings = RunOptions {
+            seed: 2,
+            out: stopped.clone(),
+            episodes: Some(4),
+            resume: true,
+            ..RunOptions::default()
+        };
+        let err = run_own(
+            "own-system",
+            problem(4, LENGTH + 1, 2).unwrap(),
+            &mut SpringMass::new(),
+            settings(LENGTH + 1),
+            &other_settings,
+            &mut (),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("optimiser.length"), "{err}");
         let refused = |name: &str, opts: RunOptions| {
             let setup = problem(1, LENGTH, 2).unwrap();
             run_own(
