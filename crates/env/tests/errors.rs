@@ -123,6 +123,11 @@ fn divergence_reports_time() {
             other => panic!("expected divergence, got {other}"),
         }
         assert!(err.to_string().starts_with("simulation diverged at t = "));
+        // The arm stopped mid-step: stepping on is refused until a reset.
+        assert!(matches!(
+            e.step(&[100.0, 100.0]).unwrap_err(),
+            EnvError::EpisodeOver { .. }
+        ));
     }
 }
 
@@ -234,6 +239,35 @@ fn config_negative_mass() {
         .unwrap_err()
         .to_string()
         .contains("mismatch"));
+}
+
+/// A link with its mass on its joint, no inertia of its own and no motor inertia would make
+/// the mass matrix singular: refused, naming it. Any one of the three is enough.
+#[test]
+fn config_link_that_cannot_resist_its_rotation() {
+    let degenerate = |cfg: &mut ArmConfig| {
+        cfg.arm.com[2] = 0.0;
+        cfg.arm.inertia[2] = 0.0;
+        cfg.arm.motor_inertia[2] = 0.0;
+    };
+    let mut cfg = ArmConfig::default();
+    degenerate(&mut cfg);
+    let err = ArmEnv::new(cfg).unwrap_err().to_string();
+    assert!(
+        err.starts_with("config arm.inertia[2] = 0 must be > 0 while com[2] and motor_inertia[2]"),
+        "{err}"
+    );
+    let fixes: [fn(&mut ArmConfig); 3] = [
+        |c| c.arm.com[2] = 0.01,
+        |c| c.arm.inertia[2] = 1e-6,
+        |c| c.arm.motor_inertia[2] = 1e-6,
+    ];
+    for fix in fixes {
+        let mut cfg = ArmConfig::default();
+        degenerate(&mut cfg);
+        fix(&mut cfg);
+        assert!(ArmEnv::new(cfg).is_ok());
+    }
 }
 
 #[test]

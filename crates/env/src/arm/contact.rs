@@ -93,8 +93,10 @@ pub fn contact(g: &Geometry, cp: &ContactParams, latch: bool, p: [f64; 2], v: [f
     c
 }
 
-/// Potential energy stored in the surfaces (the spring included while it is engaged below its
-/// release point; the release is not conservative).
+/// Potential energy stored in the surfaces and the insertion spring, the integral of
+/// [`contact`]'s position-dependent forces. The spring's force depends on x alone (with or
+/// without `hold`), so it is conservative too: past the release point its energy stays at
+/// ½k(r − c)² (no force) or, held, grows linearly with the constant force k(r − c).
 pub fn potential(g: &Geometry, cp: &ContactParams, latch: bool, p: [f64; 2]) -> f64 {
     let (x, y) = (p[0], p[1]);
     let wall = g.wall_x();
@@ -114,8 +116,13 @@ pub fn potential(g: &Geometry, cp: &ContactParams, latch: bool, p: [f64; 2]) -> 
         e += half_k * (x - g.end_x()).powi(2);
     }
     let catch = g.spring_catch_x();
-    if x >= catch && x < g.spring_release_x() {
-        e += 0.5 * g.k_insert * (x - catch).powi(2);
+    let release = g.spring_release_x();
+    if x >= catch {
+        let engaged = x.min(release) - catch;
+        e += 0.5 * g.k_insert * engaged * engaged;
+        if g.hold && x > release {
+            e += g.k_insert * engaged * (x - release);
+        }
     }
     e
 }
@@ -164,5 +171,45 @@ mod tests {
         // shifting moves everything
         let s = g.shifted(0.05, 0.0);
         assert!((s.wall_x() - 0.70).abs() < 1e-15 && (s.end_x() - 0.80).abs() < 1e-15);
+    }
+
+    /// At rest every contact force is the gradient of `potential` (the force the arm exerts
+    /// is ∂U/∂p), the insertion spring's beyond its release point included, held or not.
+    #[test]
+    fn potential_is_the_integral_of_the_resting_forces() {
+        let cp = ContactParams::default();
+        let free = Geometry::default();
+        let held = Geometry {
+            hold: true,
+            ..free.clone()
+        };
+        let h = 1e-7;
+        for g in [&free, &held] {
+            for (latch, p) in [
+                (false, [0.66, 0.0]),
+                (true, [0.69, 0.2]),
+                (true, [0.72, 0.2]),
+                (true, [0.74, 0.2]),
+                (true, [0.7503, 0.2]),
+                (true, [0.72, 0.2053]),
+                (true, [0.74, 0.1946]),
+            ] {
+                let w = contact(g, &cp, latch, p, [0.0, 0.0]).w;
+                for axis in 0..2 {
+                    let at = |d: f64| {
+                        let mut q = p;
+                        q[axis] += d;
+                        potential(g, &cp, latch, q)
+                    };
+                    let slope = (at(h) - at(-h)) / (2.0 * h);
+                    assert!(
+                        (slope - w[axis]).abs() <= 1e-5 * (1.0 + w[axis].abs()),
+                        "hold {} at {p:?}, axis {axis}: ∂U = {slope}, force {}",
+                        g.hold,
+                        w[axis]
+                    );
+                }
+            }
+        }
     }
 }

@@ -346,7 +346,12 @@ impl Environment for ArmEnv {
                     stopped_early = Some(e.to_string());
                     break;
                 }
-                Err(e) => return Err(e),
+                Err(e) => {
+                    // The ticks already run stay applied, so the arm is mid-step: only a
+                    // reset may continue.
+                    self.done = true;
+                    return Err(e);
+                }
             }
             let w = sim.contact().w;
             max_f = max_f.max(w[0].hypot(w[1]));

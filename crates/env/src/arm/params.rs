@@ -80,6 +80,19 @@ impl ArmParams {
                     format!("in [0, length[{i}] = {}]", self.length[i]),
                 ));
             }
+            // Joint i alone turning moves link i's centre by com[i] per radian and turns the
+            // link and its motor, so with all three zero that motion costs no kinetic energy
+            // and the mass matrix is singular (every other link contributes ≥ 0).
+            if self.inertia[i] + self.mass[i] * c * c + self.motor_inertia[i] == 0.0 {
+                return Err(EnvError::config(
+                    format!("{prefix}.inertia[{i}]"),
+                    self.inertia[i],
+                    format!(
+                        "> 0 while com[{i}] and motor_inertia[{i}] are 0 (the link must resist \
+                         its joint's rotation, or the mass matrix is singular)"
+                    ),
+                ));
+            }
         }
         Ok(())
     }

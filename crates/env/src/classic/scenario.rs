@@ -270,6 +270,20 @@ impl<P: ClassicSystem> Scenario<P> {
         }
         positive("scenario.max_action", self.max_action)?;
         indices("scenario.angle_indices", &self.angle_indices, n)?;
+        // The cost's Q is written for the system's own augmented layout; any other number of
+        // angles would index past it (or leave the cost blind to the angle).
+        let cost_dim = P::cost_q(self.cost_length).len();
+        if na != cost_dim {
+            return Err(EnvError::config(
+                "scenario.angle_indices",
+                format!("{:?}", self.angle_indices),
+                format!(
+                    "{} index long: the cost's Q covers {cost_dim} augmented entries, the {n} \
+                     states and a sine and cosine per angle",
+                    cost_dim.saturating_sub(n) / 2
+                ),
+            ));
+        }
         indices("scenario.policy_inputs", &self.policy_inputs, na)?;
         indices("scenario.dyn_inputs", &self.dyn_inputs, na)?;
         indices("scenario.difference_targets", &self.difference_targets, n)?;

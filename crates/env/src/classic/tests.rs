@@ -239,8 +239,25 @@ fn invalid_scenarios_rejected() {
         ..Default::default()
     };
     assert!(err(Scenario { physics, ..d() }).contains("pendulum.length"));
+    // The cost is written for one angle: two would index past its Q, none would blind it.
+    for angle_indices in [vec![0, 1], vec![]] {
+        let e = err(Scenario {
+            angle_indices,
+            ..d()
+        });
+        assert!(
+            e.contains("scenario.angle_indices") && e.contains("must be 1 index long"),
+            "{e}"
+        );
+    }
     let err = |s: CartPoleScenario| CartPole::new(s).unwrap_err().to_string();
     let d = CartPoleScenario::default;
+    let angle_indices = vec![1, 3];
+    assert!(err(Scenario {
+        angle_indices,
+        ..d()
+    })
+    .contains("scenario.angle_indices"));
     let max_action = f64::NAN;
     assert!(err(Scenario { max_action, ..d() }).contains("max_action"));
     let cost_target = vec![0.0, PI];
