@@ -2,7 +2,8 @@
 //!
 //! Writes into the output folder:
 //! * `trace.csv`: one row per control tick ([`TickRecord::CSV_HEADER`]).
-//! * `steps.csv`: one row per 0.1 s learning step (action, observation, true state, reference).
+//! * `steps.csv`: one row per 0.1 s learning step (action, observation, true state, reference,
+//!   flags; `singular` or `diverged` marks a step that ended the episode early).
 //! * `summary.json`: [`SimSummary`].
 //! * `plot.png`: x, y against the reference; stiffness; forces; the x-y path with wall and hole.
 
@@ -105,7 +106,13 @@ impl StiffnessSource {
                             check_stiffness(k, &format!("{} line {}", path.display(), i + 1))?;
                             rows.push(k);
                         }
-                        None if i == 0 => continue, // header
+                        // A header names its columns: a first line whose cells do not all
+                        // start with a letter is a malformed row, not a header to skip.
+                        None if i == 0
+                            && cells.iter().all(|c| c.starts_with(char::is_alphabetic)) =>
+                        {
+                            continue
+                        }
                         _ => {
                             return Err(EnvError::Input(format!(
                             "stiffness file {} line {}: expected two numbers k_x,k_y, got {line:?}",
@@ -186,6 +193,9 @@ pub struct SimSummary {
     pub max_abs_f: f64,
     /// The episode ended early at a singular pose.
     pub singular: bool,
+    /// Why the episode ended before its horizon (a singular pose or a runaway arm, with the
+    /// time and what ran away), `None` when it ran to the end.
+    pub stopped_early: Option<String>,
     /// Learning steps run.
     pub steps: usize,
     /// Simulated seconds.
@@ -256,6 +266,7 @@ pub fn simulate(opts: &SimOptions) -> Result<Episode, EnvError> {
         final_y: last.info.true_state[1],
         max_abs_f,
         singular: last.info.flags.get("singular").copied().unwrap_or(false),
+        stopped_early: last.info.stopped_early.clone(),
         steps: steps.len(),
         sim_time_s: sim_time,
         wall_time_s: wall,
@@ -343,6 +354,10 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("stiffness k_y"));
+        // A first line with a number in it is a row gone wrong, not a header.
+        std::fs::write(&f, "100;200\n150,250\n").unwrap();
+        let e = src.profile(1).unwrap_err().to_string();
+        assert!(e.contains("line 1: expected two numbers"), "{e}");
         std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -101,6 +101,10 @@ pub fn write_trace_csv(path: &Path, trace: &[TickRecord]) -> Result<(), EnvError
     write_file(path, out.as_bytes())
 }
 
+/// The step flags `steps.csv` carries, 1 or 0 (`singular` and `diverged` mark the step that
+/// ended the episode early).
+const STEP_FLAG_COLUMNS: [&str; 4] = ["contact", "in_hole", "singular", "diverged"];
+
 /// Writes `steps.csv`: one row per learning step, the action applied during the step, the
 /// observation at its end, the true state, the reference and the flags.
 pub fn write_steps_csv(
@@ -115,12 +119,8 @@ pub fn write_steps_csv(
     header.extend(action_names.iter().cloned());
     header.extend(state_names.iter().cloned());
     header.extend(state_names.iter().map(|n| format!("{n}_true")));
-    header.extend(
-        [
-            "x_v", "y_v", "xd_v", "yd_v", "contact", "in_hole", "singular",
-        ]
-        .map(String::from),
-    );
+    header.extend(["x_v", "y_v", "xd_v", "yd_v"].map(String::from));
+    header.extend(STEP_FLAG_COLUMNS.map(String::from));
     out.push_str(&header.join(","));
     out.push('\n');
     let nan_action = vec![f64::NAN; action_names.len()];
@@ -130,7 +130,7 @@ pub fn write_steps_csv(
         .chain(first_obs.iter().map(|v| v.to_string()))
         .chain(state_names.iter().map(|_| String::new()))
         .chain((0..4).map(|_| String::new()))
-        .chain((0..3).map(|_| String::new()))
+        .chain(STEP_FLAG_COLUMNS.map(|_| String::new()))
         .collect::<Vec<_>>()
         .join(",");
     out.push_str(&row0);
@@ -142,7 +142,7 @@ pub fn write_steps_csv(
         row.extend(s.info.true_state.iter().map(|v| v.to_string()));
         let r = s.info.reference.clone().unwrap_or_default();
         row.extend((0..4).map(|k| r.get(k).map(|v| v.to_string()).unwrap_or_default()));
-        for f in ["contact", "in_hole", "singular"] {
+        for f in STEP_FLAG_COLUMNS {
             let b = s.info.flags.get(f).copied().unwrap_or(false);
             row.push(if b { "1" } else { "0" }.to_string());
         }
