@@ -15,12 +15,13 @@
 use crate::summary::{colour, solved_at, write_json_atomic, EpisodeSummary, Summary};
 use crate::{ExperimentError, RunOptions};
 use serde::{Deserialize, Serialize};
-use std::io::{BufRead, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use vicpilco_learn::data::Rollout;
 use vicpilco_learn::record::{EpisodeRecord, LoopObserver, LoopState, Phase};
 use vicpilco_learn::value::ValueOut;
+use vicpilco_report::jsonl::parse_json_lines;
 
 /// Version of `checkpoint.json`'s layout; a different one is refused.
 pub const CHECKPOINT_FORMAT: u32 = 1;
@@ -143,27 +144,34 @@ pub(crate) fn refuse_recorded_run(dir: &Path) -> Result<(), ExperimentError> {
 }
 
 /// Open a JSON-lines file for appending, first dropping lines of episodes after `keep_upto`
-/// (a resumed run repeats them) or, with `None`, everything.
+/// (a resumed run repeats them) or, with `None`, everything. A last line cut off mid-write
+/// (the run was stopped while appending it) is dropped too: records are appended before the
+/// checkpoint that covers them is written, so it belongs to an update the resume repeats.
 pub fn open_jsonl(path: &Path, keep_upto: Option<usize>) -> Result<std::fs::File, ExperimentError> {
     let kept: Vec<String> = match keep_upto {
         Some(last) if path.exists() => {
-            let f = std::fs::File::open(path).map_err(io_err(path))?;
+            let text = std::fs::read_to_string(path).map_err(io_err(path))?;
+            let read = parse_json_lines(&text).map_err(|e| ExperimentError::Resume {
+                path: path.to_path_buf(),
+                message: format!("line {}: {}", e.line, e.error),
+            })?;
+            if let Some(line) = read.torn {
+                tracing::warn!(
+                    "{}: dropped the incomplete last line {line}, cut off when the run stopped",
+                    path.display()
+                );
+            }
             let mut kept = Vec::new();
-            for (i, line) in std::io::BufReader::new(f).lines().enumerate() {
-                let line = line.map_err(io_err(path))?;
-                let v: serde_json::Value =
-                    serde_json::from_str(&line).map_err(|e| ExperimentError::Resume {
-                        path: path.to_path_buf(),
-                        message: format!("line {}: {e}", i + 1),
-                    })?;
-                let episode = v["episode"]
-                    .as_u64()
-                    .ok_or_else(|| ExperimentError::Resume {
-                        path: path.to_path_buf(),
-                        message: format!("line {} has no \"episode\"", i + 1),
-                    })?;
+            for line in read.lines {
+                let episode =
+                    line.value["episode"]
+                        .as_u64()
+                        .ok_or_else(|| ExperimentError::Resume {
+                            path: path.to_path_buf(),
+                            message: format!("line {} has no \"episode\"", line.number),
+                        })?;
                 if episode as usize <= last {
-                    kept.push(line);
+                    kept.push(line.text.to_string());
                 }
             }
             kept
@@ -295,7 +303,11 @@ impl Recorder<'_> {
         path: PathBuf,
         line: &serde_json::Value,
     ) -> Result<(), ExperimentError> {
-        writeln!(file, "{line}")
+        // One write per record, newline included: `writeln!` issues a write per formatted
+        // token, so a stop mid-record would leave a line cut anywhere.
+        let mut text = line.to_string();
+        text.push('\n');
+        file.write_all(text.as_bytes())
             .and_then(|()| file.flush())
             .map_err(|e| ExperimentError::Io { path, source: e })
     }

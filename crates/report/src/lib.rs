@@ -26,6 +26,7 @@ mod error;
 mod figures;
 mod html;
 mod json;
+pub mod jsonl;
 mod markdown;
 mod plot;
 

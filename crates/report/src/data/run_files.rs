@@ -3,6 +3,7 @@
 
 use super::{FinalEval, PathPoint, PredStep, Prediction, Rollout, Rows};
 use crate::json::Node;
+use crate::jsonl::parse_json_lines;
 use crate::ReportError;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -49,31 +50,21 @@ pub(super) fn read_lines(
     };
     let name = file.file_name().map(|n| n.to_string_lossy().into_owned());
     let name = name.unwrap_or_default();
-    let numbered: Vec<(usize, &str)> = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty())
-        .map(|(i, l)| (i + 1, l))
-        .collect();
-    let mut values = Vec::with_capacity(numbered.len());
-    for (k, &(line, s)) in numbered.iter().enumerate() {
-        match serde_json::from_str(s) {
-            Ok(v) => values.push((line, v)),
-            // The writer appends while a run is going: a cut-off final line is expected then.
-            Err(_) if k + 1 == numbered.len() && !text.ends_with('\n') => {
-                notes.push(format!(
-                    "{name}: ignored the incomplete last line {line} (run still writing?)"
-                ));
-            }
-            Err(error) => {
-                return Err(ReportError::Json {
-                    file: file.to_path_buf(),
-                    location: format!("line {line}"),
-                    error,
-                })
-            }
-        }
+    let read = parse_json_lines(&text).map_err(|e| ReportError::Json {
+        file: file.to_path_buf(),
+        location: format!("line {}", e.line),
+        error: e.error,
+    })?;
+    if let Some(line) = read.torn {
+        notes.push(format!(
+            "{name}: ignored the incomplete last line {line} (run still writing?)"
+        ));
     }
+    let values = read
+        .lines
+        .into_iter()
+        .map(|l| (l.number, l.value))
+        .collect();
     Ok(Some(Lines {
         file: file.to_path_buf(),
         values,
