@@ -242,13 +242,30 @@ fn load_config(
     name: &str,
     config: Option<&Path>,
 ) -> Result<Option<ArmExperiment>, ExperimentError> {
+    let shipped = |name: &str| -> Result<Option<ArmExperiment>, ExperimentError> {
+        config::shipped(name)
+            .map(|(file, text)| config::parse(text, &format!("experiments/{file}.toml")))
+            .transpose()
+            .map_err(Into::into)
+    };
     Ok(match (config, name) {
-        (Some(path), _) => Some(config::load(path)?),
+        (Some(_), "pendulum" | "cartpole") => {
+            return Err(ExperimentError::NotArm {
+                name: name.to_string(),
+                what: "--config",
+            })
+        }
+        (Some(path), _) => {
+            let cfg = config::load(path)?;
+            // Any other name labels a variant of one's own.
+            if let Some(theirs) = shipped(name)? {
+                cfg.check_variant_of(name, &theirs, &path.display().to_string())?;
+            }
+            Some(cfg)
+        }
         (None, "pendulum" | "cartpole") => None,
         (None, _) => {
-            let (file, text) =
-                config::shipped(name).ok_or_else(|| ExperimentError::Unknown(name.to_string()))?;
-            Some(config::parse(text, &format!("experiments/{file}.toml"))?)
+            Some(shipped(name)?.ok_or_else(|| ExperimentError::Unknown(name.to_string()))?)
         }
     })
 }
@@ -500,6 +517,19 @@ where
         (None, false) => None,
     };
     let keep = checkpoint.as_ref().map(|c| c.state.completed);
+    // Equal is allowed: it redoes only what follows the last update (the final evaluation,
+    // the summary and the report), e.g. under another `vilta.final_policy`.
+    if let Some(done) = keep.filter(|&done| opts.resume && setup.episodes < done) {
+        return Err(ExperimentError::Resume {
+            path: opts.out.join("checkpoint.json"),
+            message: format!(
+                "the run already has {done} policy updates and --episodes {} would learn none \
+                 (updates are not undone): give --episodes above {done} to continue, or {done} \
+                 to redo only the final evaluation and the report",
+                setup.episodes
+            ),
+        });
+    }
     let rollouts = open_jsonl(&opts.out.join("rollouts.jsonl"), keep)?;
     let predictions = open_jsonl(&opts.out.join("predictions.jsonl"), keep)?;
     let policies = open_jsonl(&opts.out.join("policies.jsonl"), keep)?;

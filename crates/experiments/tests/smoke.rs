@@ -90,6 +90,27 @@ fn pendulum_two_updates_write_a_reproducible_summary() {
     );
     assert!(err.to_string().contains("--resume"), "{err}");
     assert_eq!(std::fs::read(a.join("rollouts.jsonl")).unwrap(), recorded);
+
+    // A resume asking for fewer updates than the run has cannot undo them: refused, and the
+    // record (sessions and wall time included) is left as it was.
+    let summary_before = std::fs::read(a.join("summary.json")).unwrap();
+    let fewer = RunOptions {
+        seed: 7,
+        out: a.clone(),
+        episodes: Some(1),
+        resume: true,
+        ..Default::default()
+    };
+    let err = run("pendulum", &fewer, &mut ()).unwrap_err().to_string();
+    assert!(
+        err.contains("already has 2 policy updates") && err.contains("--episodes 1"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read(a.join("summary.json")).unwrap(),
+        summary_before
+    );
+    assert_eq!(std::fs::read(a.join("rollouts.jsonl")).unwrap(), recorded);
     let _ = std::fs::remove_dir_all(&base);
 }
 
@@ -294,6 +315,12 @@ fn vil_gic_quick_run_writes_every_file_and_resumes_bit_for_bit() {
     .unwrap_err()
     .to_string();
     assert!(err.contains("cost.w_std"), "{err}");
+    // Stopped while appending update 2's roll-out: the cut-off line is dropped on resume.
+    let mut rollouts = std::fs::OpenOptions::new()
+        .append(true)
+        .open(split.join("rollouts.jsonl"))
+        .unwrap();
+    std::io::Write::write_all(&mut rollouts, b"{\"costs\":[1.0,0.9").unwrap();
     run("vil-gic", &opts(&split, None, true), &mut ()).expect("resumed part");
 
     assert_eq!(

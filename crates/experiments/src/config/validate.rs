@@ -51,7 +51,64 @@ impl Check<'_> {
     }
 }
 
+/// A setting as the TOML spells it (a quoted string for these enums).
+fn spelt(v: &impl serde::Serialize) -> String {
+    serde_json::to_string(v).unwrap_or_else(|e| e.to_string())
+}
+
 impl ArmExperiment {
+    /// A `--config` file run under the name of a shipped experiment (`shipped`, that
+    /// experiment's own settings) must be a variant of it: the same task, impedance law,
+    /// policy family and kind of start, since the name decides which thesis claims the run is
+    /// judged by and which runs `acceptance` pools with it. Everything else may differ (what
+    /// the probes do). The error names the first key that makes it another experiment.
+    pub fn check_variant_of(
+        &self,
+        name: &str,
+        shipped: &ArmExperiment,
+        file: &str,
+    ) -> Result<(), ConfigError> {
+        let c = Check { file };
+        let other = |key: &str, this: String, theirs: String| {
+            Err(c.fail(
+                key,
+                format!(
+                    "is {this}, but `{name}` has {theirs}: this file is not a variant of \
+                     `{name}`; run it under a name of its own"
+                ),
+            ))
+        };
+        if self.task != shipped.task {
+            return other("task", spelt(&self.task), spelt(&shipped.task));
+        }
+        if self.controller != shipped.controller {
+            return other(
+                "controller",
+                spelt(&self.controller),
+                spelt(&shipped.controller),
+            );
+        }
+        if self.policy.kind != shipped.policy.kind {
+            return other(
+                "policy.kind",
+                spelt(&self.policy.kind),
+                spelt(&shipped.policy.kind),
+            );
+        }
+        let variable = |cfg: &ArmExperiment| match cfg.start.y_range {
+            Some(_) => "set (a variable start)",
+            None => "unset (a fixed start)",
+        };
+        if self.start.y_range.is_some() != shipped.start.y_range.is_some() {
+            return other(
+                "start.y_range",
+                variable(self).into(),
+                variable(shipped).into(),
+            );
+        }
+        Ok(())
+    }
+
     /// Ranges and cross-field rules; the error names the first bad key.
     pub fn validate(&self, file: &str) -> Result<(), ConfigError> {
         let c = Check { file };
