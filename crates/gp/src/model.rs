@@ -24,7 +24,8 @@ pub struct GpModel {
     inv_k: Vec<Mat<f64>>,
 }
 
-/// Check inputs, targets and hyper-parameters agree in shape and hold only finite numbers.
+/// Check inputs, targets and hyper-parameters agree in shape, hold at least one training
+/// point and only finite numbers.
 pub fn validate_data(
     inputs: MatRef<'_, f64>,
     targets: MatRef<'_, f64>,
@@ -32,6 +33,14 @@ pub fn validate_data(
 ) -> Result<()> {
     check_finite(inputs, "GP training inputs")?;
     check_finite(targets, "GP training targets")?;
+    // A GP on no data is only its prior, and moment matching's block kernels assume N ≥ 1.
+    if inputs.nrows() == 0 {
+        return Err(GpError::Shape {
+            what: "GP training inputs".into(),
+            expected: "at least 1 row (one per training point)".into(),
+            got: "0 rows".into(),
+        });
+    }
     if inputs.nrows() != targets.nrows() {
         return Err(GpError::Shape {
             what: "GP training targets".into(),

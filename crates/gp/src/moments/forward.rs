@@ -323,7 +323,13 @@ impl PairBlock {
     ) -> BlockOperands<'a> {
         let w = w.map(|w| {
             let stride = w.col_stride() as usize;
-            let len = stride * (w.ncols() - 1) + w.nrows();
+            // An empty W (N = 0, which `validate_data` refuses but a hand-built `MmModel` can
+            // still hold) has no storage to span: `ncols − 1` would wrap to a huge length.
+            let Some(last_col) = w.ncols().checked_sub(1).filter(|_| w.nrows() > 0) else {
+                return (&[][..], stride);
+            };
+            let len = stride * last_col + w.nrows();
+            debug_assert!(stride >= w.nrows(), "a Mat's columns do not overlap");
             // SAFETY: a Mat's columns are contiguous with this stride; the slice covers
             // exactly its storage from the first to the last element.
             (

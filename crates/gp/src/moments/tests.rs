@@ -302,3 +302,30 @@ fn bad_inputs_are_errors_not_panics() {
     let bad = Mat::from_fn(2, 2, |i, j| if i == j { -5.0 } else { 0.0 });
     assert!(forward(&mm, &[0.0, 0.0], bad.as_ref()).is_err());
 }
+
+#[test]
+fn a_hand_built_model_without_centres_gives_the_prior() {
+    // `validate_data` refuses N = 0, but `MmModel`'s fields are public: the block kernels'
+    // view of an empty W must not span memory it does not own.
+    let (centres, beta) = (Mat::<f64>::zeros(0, 2), Mat::<f64>::zeros(0, 1));
+    let hyp = [Hyper {
+        log_ls: vec![0.0; 2],
+        log_sf: 0.5,
+        log_sn: -2.0,
+    }];
+    let w = [Mat::<f64>::zeros(0, 0)];
+    let mm = MmModel {
+        centres: centres.as_ref(),
+        beta: beta.as_ref(),
+        hyp: &hyp,
+        variance: Variance::Model(&w),
+    };
+    let s = Mat::from_fn(2, 2, |i, j| if i == j { 0.1 } else { 0.0 });
+    let (mo, _) = forward(&mm, &[0.3, -0.1], s.as_ref()).unwrap();
+    assert_eq!(mo.mean, vec![0.0]);
+    assert!(
+        (mo.cov[(0, 0)] - hyp[0].sf2()).abs() < 1e-15,
+        "{:?}",
+        mo.cov
+    );
+}

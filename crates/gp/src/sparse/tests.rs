@@ -383,3 +383,36 @@ fn bad_inducing_inputs_are_rejected_with_their_position() {
         Err(GpError::Shape { .. })
     ));
 }
+
+#[test]
+fn an_empty_training_set_is_refused_by_every_entry_point() {
+    let (x, y) = (Mat::<f64>::zeros(0, 2), Mat::<f64>::zeros(0, 1));
+    let hyp = vec![Hyper {
+        log_ls: vec![0.0; 2],
+        log_sf: 0.0,
+        log_sn: -2.0,
+    }];
+    let names_the_inputs = |err: GpError| {
+        assert!(
+            matches!(&err, GpError::Shape { what, got, .. }
+                if what == "GP training inputs" && got == "0 rows"),
+            "{err:?}"
+        );
+        assert!(err.to_string().contains("at least 1 row"), "{err}");
+    };
+    names_the_inputs(GpModel::new(x.clone(), y.clone(), hyp.clone()).unwrap_err());
+    let u = Mat::<f64>::zeros(3, 2);
+    names_the_inputs(SparseGpModel::new(x.as_ref(), y.as_ref(), hyp.clone(), u).unwrap_err());
+    names_the_inputs(
+        DynamicsModel::fit(
+            x.clone(),
+            y.clone(),
+            &hyp,
+            None,
+            &DynamicsOptions::default(),
+        )
+        .unwrap_err(),
+    );
+    let sparse = SparseTrainOptions::default();
+    names_the_inputs(train_sparse(x.as_ref(), y.as_ref(), &hyp, None, &sparse).unwrap_err());
+}
