@@ -40,8 +40,9 @@ pub enum GpError {
         jitter: f64,
     },
     /// A computation produced NaN/inf from finite inputs. Also raised for non-finite
-    /// hyper-parameters, a non-positive FITC Γ, and parameter adjoints asked of a moment-matching
-    /// flavour with model uncertainty.
+    /// hyper-parameters, a non-positive FITC Γ, a negative variance in a moment-matching input
+    /// covariance, and parameter adjoints asked of a moment-matching flavour with model
+    /// uncertainty.
     #[error("{what}: numerical breakdown ({detail})")]
     Numerical {
         /// Which quantity, e.g. `"FITC diagonal Γ"`, `"nlml"`.

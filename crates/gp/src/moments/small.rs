@@ -100,5 +100,16 @@ pub(crate) fn check_moment_input(m: &[f64], s: MatRef<'_, f64>, d: usize) -> Res
             value: m[i],
         });
     }
-    crate::linalg::check_finite(s, "moment-matching input covariance")
+    crate::linalg::check_finite(s, "moment-matching input covariance")?;
+    // Only the diagonal, O(D) per call: a full PSD test would cost a factorisation on the hot
+    // path, and the Cholesky of `s + Λ` that follows catches gross indefiniteness. A variance
+    // propagated as `E[x²] − E[x]²` (a known input, a deterministic start) may come out a few
+    // ulps below 0 of its second moment, so that much is rounding, not a caller's error.
+    if let Some(k) = (0..d).find(|&k| s[(k, k)] < -1e-12 * (1.0 + m[k] * m[k])) {
+        return Err(GpError::Numerical {
+            what: "moment-matching input covariance".into(),
+            detail: format!("negative variance s[{k}, {k}] = {} at index {k}", s[(k, k)]),
+        });
+    }
+    Ok(())
 }

@@ -329,3 +329,29 @@ fn a_hand_built_model_without_centres_gives_the_prior() {
         mo.cov
     );
 }
+
+#[test]
+fn a_negative_input_variance_is_named_with_its_index() {
+    let mut rng = Lcg(32);
+    let gp = random_gp(&mut rng, 10, 2, 1);
+    let mm = MmModel::with_uncertainty(&gp);
+    // Small enough that `s + Λ` still factorises: only the explicit check can refuse it.
+    let s = Mat::from_fn(2, 2, |i, j| match (i, j) {
+        (0, 0) => 0.1,
+        (1, 1) => -0.01,
+        _ => 0.0,
+    });
+    let err = forward(&mm, &[0.0, 0.0], s.as_ref()).unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        msg.contains("moment-matching input covariance") && msg.contains("index 1"),
+        "{msg}"
+    );
+    // Rounding below an exactly zero variance is not an error.
+    let s = Mat::from_fn(2, 2, |i, j| match (i, j) {
+        (0, 0) => 0.1,
+        (1, 1) => -1e-17,
+        _ => 0.0,
+    });
+    assert!(forward(&mm, &[0.0, 0.0], s.as_ref()).is_ok());
+}
