@@ -91,7 +91,7 @@ fn print_fit(
         "sf", "sn", "train obj", "nlpd", "rmse/sd"
     );
     let model = GpModel::new(x.clone(), y.clone(), hyp.clone())?;
-    let scores = held_out(&model, xt, yt);
+    let scores = held_out(&model, xt, yt)?;
     for (e, h) in hyp.iter().enumerate() {
         print!("{:>5}", arm::GP_TARGET_NAMES[e]);
         for l in &h.log_ls {
@@ -111,7 +111,7 @@ fn print_fit(
 }
 
 /// Mean negative log predictive density and RMSE over the target's std, per output.
-fn held_out(model: &GpModel, x: &Mat<f64>, y: &Mat<f64>) -> Vec<(f64, f64)> {
+fn held_out(model: &GpModel, x: &Mat<f64>, y: &Mat<f64>) -> Result<Vec<(f64, f64)>> {
     let e = y.ncols();
     let mut nlpd = vec![0.0; e];
     let mut se = vec![0.0; e];
@@ -119,7 +119,7 @@ fn held_out(model: &GpModel, x: &Mat<f64>, y: &Mat<f64>) -> Vec<(f64, f64)> {
     let n = x.nrows();
     for i in 0..n {
         let xi: Vec<f64> = (0..x.ncols()).map(|j| x[(i, j)]).collect();
-        let (m, v) = model.predict(&xi);
+        let (m, v) = model.predict(&xi)?;
         for o in 0..e {
             let var = v[o] + (2.0 * model.hyp()[o].log_sn).exp();
             let r = y[(i, o)] - m[o];
@@ -128,7 +128,7 @@ fn held_out(model: &GpModel, x: &Mat<f64>, y: &Mat<f64>) -> Vec<(f64, f64)> {
             ss[o] += y[(i, o)] * y[(i, o)];
         }
     }
-    (0..e)
+    Ok((0..e)
         .map(|o| (nlpd[o] / n as f64, (se[o] / ss[o].max(1e-300)).sqrt()))
-        .collect()
+        .collect())
 }

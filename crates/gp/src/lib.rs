@@ -30,7 +30,7 @@
 //! assert!(report.outputs[0].objective.is_finite());
 //! let gp = GpModel::new(x, y, hyp)?;
 //!
-//! let (mean, var) = gp.predict(&[0.5]);
+//! let (mean, var) = gp.predict(&[0.5])?;
 //! assert!((mean[0] - 0.5f64.sin()).abs() < 1e-3 && var[0] < 1e-4);
 //!
 //! let (m, s) = (0.5f64, 0.09f64);

@@ -159,8 +159,10 @@ impl GpModel {
         self.chol.iter().map(|c| c.jitter).collect()
     }
 
-    /// Predictive mean and latent variance (no noise) of every output at a deterministic input.
-    pub fn predict(&self, x: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    /// Predictive mean and latent variance (no noise) of every output at a deterministic input
+    /// `x` of length D; another length is a [`GpError::Shape`].
+    pub fn predict(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
+        check_query(x, self.input_dim())?;
         let kernel = SquaredExponential;
         let n = self.n();
         let mut mean = Vec::with_capacity(self.hyp.len());
@@ -174,8 +176,21 @@ impl GpModel {
             let kk: f64 = kx.iter().zip(&v).map(|(a, b)| a * b).sum();
             var.push((h.sf2() - kk).max(0.0));
         }
-        (mean, var)
+        Ok((mean, var))
     }
+}
+
+/// The length check of a deterministic prediction input: the kernel zips `x` with each
+/// training row, so a wrong length would be silently truncated rather than fail.
+pub(crate) fn check_query(x: &[f64], d: usize) -> Result<()> {
+    if x.len() == d {
+        return Ok(());
+    }
+    Err(GpError::Shape {
+        what: "GP prediction input x".into(),
+        expected: format!("length {d} (the input dimension D)"),
+        got: format!("length {}", x.len()),
+    })
 }
 
 /// Adjoints of a GP's data and hyper-parameters.

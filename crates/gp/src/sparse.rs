@@ -30,7 +30,7 @@ pub use train::{
 use crate::error::{GpError, Result};
 use crate::kernel::Hyper;
 use crate::linalg::{check_finite, symmetrise, JitterPolicy};
-use crate::model::{validate_data, GpModel};
+use crate::model::{check_query, validate_data, GpModel};
 use crate::train::{train as train_full, TrainOptions, TrainReport};
 use faer::{Mat, MatRef};
 use rayon::prelude::*;
@@ -142,8 +142,10 @@ impl SparseGpModel {
     }
 
     /// Predictive mean and latent variance (no noise) of every output at a deterministic
-    /// input: `k_*ᵀ β` and `σ_f² − k_*ᵀ (K_mm⁻¹ − B⁻¹) k_*`.
-    pub fn predict(&self, x: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    /// input `x` of length D: `k_*ᵀ β` and `σ_f² − k_*ᵀ (K_mm⁻¹ − B⁻¹) k_*`. Another length is
+    /// a [`GpError::Shape`](crate::GpError::Shape).
+    pub fn predict(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
+        check_query(x, self.input_dim())?;
         let xm = MatRef::from_row_major_slice(x, 1, x.len());
         let mut mean = Vec::with_capacity(self.hyp.len());
         let mut var = Vec::with_capacity(self.hyp.len());
@@ -160,7 +162,7 @@ impl SparseGpModel {
             let q: f64 = k.iter().zip(&ik).map(|(a, b)| a * b).sum();
             var.push((h.sf2() - q).max(0.0));
         }
-        (mean, var)
+        Ok((mean, var))
     }
 }
 
@@ -327,8 +329,9 @@ impl DynamicsModel {
         }
     }
     /// Predictive mean and latent variance (no noise), E each, at a deterministic input `x`
-    /// (length D): [`GpModel::predict`] or [`SparseGpModel::predict`].
-    pub fn predict(&self, x: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    /// (length D): [`GpModel::predict`] or [`SparseGpModel::predict`], with their
+    /// [`GpError::Shape`](crate::GpError::Shape) for another length.
+    pub fn predict(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
         match self {
             Self::Full(m) => m.predict(x),
             Self::Sparse(m) => m.predict(x),

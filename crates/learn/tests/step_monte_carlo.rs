@@ -134,7 +134,7 @@ fn check_step_against_monte_carlo(kind: Dynamics) {
         let u = policy.action(&pick(&spec.policy_inputs));
         let mut gp_input = pick(&spec.dyn_inputs);
         gp_input.extend(&u);
-        let (mean, var) = predict(&gp_input);
+        let (mean, var) = predict(&gp_input).unwrap();
         let x_next: Vec<f64> = (0..d0)
             .map(|k| {
                 let y = mean[k] + var[k].sqrt() * normal(&mut rng);

@@ -180,8 +180,8 @@ fn inducing_inputs_at_the_training_inputs_reproduce_the_full_gp() {
     let sparse = SparseGpModel::new(x.as_ref(), y.as_ref(), hyp, x.clone()).unwrap();
     for t in 0..10 {
         let xs: Vec<f64> = (0..d).map(|c| 0.7 * ((t * 3 + c) as f64).sin()).collect();
-        let (mf, vf) = full.predict(&xs);
-        let (ms, vs) = sparse.predict(&xs);
+        let (mf, vf) = full.predict(&xs).unwrap();
+        let (ms, vs) = sparse.predict(&xs).unwrap();
         for e in 0..2 {
             assert!((mf[e] - ms[e]).abs() < 1e-5, "mean {} vs {}", mf[e], ms[e]);
             assert!((vf[e] - vs[e]).abs() < 1e-5, "var {} vs {}", vf[e], vs[e]);
@@ -312,8 +312,8 @@ fn dynamics_model_switches_to_sparse_above_the_threshold() {
     let ind = r.inducing.expect("inducing inputs were optimised");
     assert!(ind.nlml <= ind.initial_nlml);
     // Sparse predictions are close to the full GP on this smooth function.
-    let (mf, _) = full.predict(&[0.2, -0.3]);
-    let (ms, _) = sp.predict(&[0.2, -0.3]);
+    let (mf, _) = full.predict(&[0.2, -0.3]).unwrap();
+    let (ms, _) = sp.predict(&[0.2, -0.3]).unwrap();
     for e in 0..2 {
         assert!((mf[e] - ms[e]).abs() < 0.1, "{mf:?} vs {ms:?}");
     }
@@ -415,4 +415,33 @@ fn an_empty_training_set_is_refused_by_every_entry_point() {
     );
     let sparse = SparseTrainOptions::default();
     names_the_inputs(train_sparse(x.as_ref(), y.as_ref(), &hyp, None, &sparse).unwrap_err());
+}
+
+#[test]
+fn a_prediction_input_of_the_wrong_length_is_a_shape_error() {
+    let mut rng = ChaCha8Rng::seed_from_u64(28);
+    let x = normal_mat(12, 2, &mut rng);
+    let y = smooth(&x, 1, &mut rng);
+    let hyp = vec![hyp_for(&x, &mut rng)];
+    let full = GpModel::new(x.clone(), y.clone(), hyp.clone()).unwrap();
+    let sparse =
+        SparseGpModel::new(x.as_ref(), y.as_ref(), hyp, normal_mat(4, 2, &mut rng)).unwrap();
+    for bad in [&[0.1][..], &[0.1, 0.2, 0.3][..]] {
+        for (name, err) in [
+            ("full", full.predict(bad).unwrap_err()),
+            ("sparse", sparse.predict(bad).unwrap_err()),
+            (
+                "dynamics",
+                DynamicsModel::Full(full.clone()).predict(bad).unwrap_err(),
+            ),
+        ] {
+            assert!(
+                matches!(&err, GpError::Shape { what, .. } if what == "GP prediction input x"),
+                "{name}: {err:?}"
+            );
+            let want = format!("got length {}", bad.len());
+            assert!(err.to_string().contains(&want), "{name}: {err}");
+        }
+    }
+    assert!(full.predict(&[0.1, 0.2]).is_ok() && sparse.predict(&[0.1, 0.2]).is_ok());
 }

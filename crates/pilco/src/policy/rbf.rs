@@ -202,7 +202,12 @@ impl Policy for RbfPolicy {
         }
     }
 
+    /// Panics when `x` is not of length [`Policy::n_inputs`]: the trait's `action` cannot
+    /// fail, and a truncated input would be a wrong action, not a usable one.
     fn action(&self, x: &[f64]) -> Vec<f64> {
-        self.gp.predict(x).0
+        match self.gp.predict(x) {
+            Ok((mean, _)) => mean,
+            Err(e) => panic!("RBF policy action: {e}"),
+        }
     }
 }
