@@ -27,9 +27,9 @@ pub use train::{
     SparseTrainOptions, SparseTrainReport,
 };
 
-use crate::error::{GpError, Result};
+use crate::error::Result;
 use crate::kernel::Hyper;
-use crate::linalg::{check_finite, symmetrise, JitterPolicy};
+use crate::linalg::{symmetrise, JitterPolicy};
 use crate::model::{check_query, validate_data, GpModel};
 use crate::train::{train as train_full, TrainOptions, TrainReport};
 use faer::{Mat, MatRef};
@@ -59,14 +59,7 @@ impl SparseGpModel {
         inducing: Mat<f64>,
     ) -> Result<Self> {
         validate_data(inputs, targets, &hyp)?;
-        check_finite(inducing.as_ref(), "inducing inputs")?;
-        if inducing.ncols() != inputs.ncols() || inducing.nrows() == 0 {
-            return Err(GpError::Shape {
-                what: "inducing inputs".into(),
-                expected: format!("M×{} with M ≥ 1", inputs.ncols()),
-                got: format!("{}×{}", inducing.nrows(), inducing.ncols()),
-            });
-        }
+        fitc::validate_inducing(inducing.as_ref(), inputs.ncols(), "inducing inputs")?;
         let m = inducing.nrows();
         let per_output: Vec<Result<OutputParts>> = hyp
             .par_iter()

@@ -41,7 +41,8 @@
 use crate::error::{GpError, Result};
 use crate::fastexp::exp_in_place;
 use crate::kernel::{Hyper, Kernel, SquaredExponential};
-use crate::linalg::{symmetrise, Chol, JitterPolicy};
+use crate::linalg::{check_finite, symmetrise, Chol, JitterPolicy};
+use crate::model::validate_data;
 use faer::{Accum, Mat, MatRef, Par};
 
 /// The fixed ridge PILCO adds to `K_mm` wherever it appears (`fitc.m`, `gp1d.m`).
@@ -93,6 +94,20 @@ pub(crate) struct FitcFactor {
     pub alpha: Vec<f64>,
     /// Negative log marginal likelihood.
     pub value: f64,
+}
+
+/// Check inducing inputs `what` are finite and M×`d` with M ≥ 1 (the training data are
+/// [`validate_data`]'s).
+pub(crate) fn validate_inducing(inducing: MatRef<'_, f64>, d: usize, what: &str) -> Result<()> {
+    check_finite(inducing, what)?;
+    if inducing.ncols() != d || inducing.nrows() == 0 {
+        return Err(GpError::Shape {
+            what: what.into(),
+            expected: format!("M×{d} with M ≥ 1"),
+            got: format!("{}×{}", inducing.nrows(), inducing.ncols()),
+        });
+    }
+    Ok(())
 }
 
 /// Factorise one output. `kmm_jitter`: `None` refuses a `K_mm + ρI` that is not numerically
@@ -226,13 +241,21 @@ pub struct FitcEval {
 }
 
 /// FITC negative log marginal likelihood of one output (targets `y`) and its gradient w.r.t.
-/// the inducing inputs `u` (M×D) and the log hyper-parameters.
+/// the inducing inputs `u` (M×D) and the log hyper-parameters. The data are checked as
+/// [`train_inducing`](super::train_inducing) checks them, so a NaN is reported where it is,
+/// not as the non-positive Γ or the non-finite value it leads to.
 pub fn fitc_nlml(
     inputs: MatRef<'_, f64>,
     y: &[f64],
     hyp: &Hyper,
     inducing: MatRef<'_, f64>,
 ) -> Result<FitcEval> {
+    validate_data(
+        inputs,
+        MatRef::from_column_major_slice(y, y.len(), 1),
+        std::slice::from_ref(hyp),
+    )?;
+    validate_inducing(inducing, inputs.ncols(), "inducing inputs")?;
     let f = factor(inducing, inputs, y, hyp, None)?;
     Ok(gradient(&f, inducing, inputs, hyp))
 }

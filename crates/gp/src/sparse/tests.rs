@@ -1,5 +1,6 @@
 use super::fitc::se_cross;
 use super::*;
+use crate::error::GpError;
 use crate::fd;
 use crate::kernel::{Kernel, SquaredExponential};
 use crate::linalg::Chol;
@@ -444,4 +445,34 @@ fn a_prediction_input_of_the_wrong_length_is_a_shape_error() {
         }
     }
     assert!(full.predict(&[0.1, 0.2]).is_ok() && sparse.predict(&[0.1, 0.2]).is_ok());
+}
+
+#[test]
+fn fitc_nlml_names_a_nan_in_its_data_as_training_does() {
+    let mut rng = ChaCha8Rng::seed_from_u64(29);
+    let mut x = normal_mat(10, 2, &mut rng);
+    let mut y = col(&smooth(&x, 1, &mut rng), 0);
+    let h = hyp_for(&x, &mut rng);
+    let mut u = normal_mat(4, 2, &mut rng);
+    x[(3, 0)] = f64::NAN;
+    let err = fitc_nlml(x.as_ref(), &y, &h, u.as_ref()).unwrap_err();
+    assert!(
+        matches!(&err, GpError::NonFinite { what, row: 3, col: 0, .. } if what == "GP training inputs"),
+        "{err:?}"
+    );
+    x[(3, 0)] = 0.0;
+    y[8] = f64::NAN;
+    let err = fitc_nlml(x.as_ref(), &y, &h, u.as_ref()).unwrap_err();
+    assert!(
+        matches!(&err, GpError::NonFinite { what, row: 8, col: 0, .. } if what == "GP training targets"),
+        "{err:?}"
+    );
+    y[8] = 0.0;
+    u[(1, 1)] = f64::INFINITY;
+    let err = fitc_nlml(x.as_ref(), &y, &h, u.as_ref()).unwrap_err();
+    assert!(
+        matches!(&err, GpError::NonFinite { what, row: 1, col: 1, .. } if what == "inducing inputs"),
+        "{err:?}"
+    );
+    assert!(fitc_nlml(x.as_ref(), &y, &h, normal_mat(4, 2, &mut rng).as_ref()).is_ok());
 }

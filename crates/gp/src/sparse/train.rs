@@ -10,11 +10,10 @@
 //!    by L-BFGS with the analytic gradient of [`fitc`](super::fitc). Outputs are evaluated in
 //!    parallel and summed in output order.
 
-use super::fitc::{factor, gradient};
+use super::fitc::{factor, gradient, validate_inducing};
 use super::SparseGpModel;
 use crate::error::{GpError, Result};
 use crate::kernel::Hyper;
-use crate::linalg::check_finite;
 use crate::model::validate_data;
 use crate::train::{
     minimize, train, MinimizeOptions, Termination, TrainOptions, TrainReport, Wolfe,
@@ -192,15 +191,8 @@ pub fn train_inducing(
 ) -> Result<(Mat<f64>, InducingReport)> {
     let start = Instant::now();
     validate_data(inputs, targets, hyp)?;
-    check_finite(init, "initial inducing inputs")?;
+    validate_inducing(init, inputs.ncols(), "initial inducing inputs")?;
     let (m, d) = (init.nrows(), inputs.ncols());
-    if init.ncols() != d || m == 0 {
-        return Err(GpError::Shape {
-            what: "initial inducing inputs".into(),
-            expected: format!("M×{d} with M ≥ 1"),
-            got: format!("{}×{}", init.nrows(), init.ncols()),
-        });
-    }
     let ys: Vec<Vec<f64>> = (0..targets.ncols())
         .map(|e| (0..targets.nrows()).map(|i| targets[(i, e)]).collect())
         .collect();

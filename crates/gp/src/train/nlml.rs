@@ -22,6 +22,7 @@
 use crate::error::{GpError, Result};
 use crate::kernel::{Hyper, Kernel, SquaredExponential};
 use crate::linalg::{JitterPolicy, SpdWorkspace};
+use crate::model::validate_data;
 use faer::{Mat, MatRef};
 
 /// Value and gradient of a training objective at one hyper-parameter set.
@@ -110,8 +111,15 @@ pub fn input_std(inputs: MatRef<'_, f64>) -> Vec<f64> {
 }
 
 /// Negative log marginal likelihood of one output with the squared-exponential kernel, and its
-/// gradient w.r.t. the log hyper-parameters (PILCO's `gpr`).
+/// gradient w.r.t. the log hyper-parameters (PILCO's `gpr`). The data are checked as
+/// [`crate::train()`] checks them ([`validate_data`]), so a NaN is reported where it is, not as
+/// the factorisation it breaks.
 pub fn nlml(inputs: MatRef<'_, f64>, y: &[f64], hyp: &Hyper) -> Result<NlmlEval> {
+    validate_data(
+        inputs,
+        MatRef::from_column_major_slice(y, y.len(), 1),
+        std::slice::from_ref(hyp),
+    )?;
     let mut ws = NlmlWorkspace::new(inputs.nrows());
     nlml_with_kernel(
         &SquaredExponential,
@@ -158,7 +166,9 @@ impl NlmlWorkspace {
 }
 
 /// [`nlml`] for any [`Kernel`], with the jitter policy used when `K + σ_n² I` does not
-/// factorise, and a workspace (sized for N, see [`NlmlWorkspace`]).
+/// factorise, and a workspace (sized for N, see [`NlmlWorkspace`]). The data are not checked
+/// for NaN here, once per optimiser evaluation: callers validate them once ([`validate_data`],
+/// as [`crate::train()`] does).
 pub fn nlml_with_kernel<K: Kernel + ?Sized>(
     kernel: &K,
     inputs: MatRef<'_, f64>,

@@ -434,3 +434,22 @@ fn a_lengthscale_ceiling_keeps_an_ignored_input_in_play() {
     let extra = ceiling_penalty(&held[0], &ceiling).0;
     assert_objective_is_penalised_nlml(&x, &y, &held[0], &rep, extra);
 }
+
+#[test]
+fn nlml_names_a_nan_in_its_data_as_train_does() {
+    let (mut x, mut y) = data(10, 3, 1);
+    let h = start(&x, &y);
+    x[(4, 1)] = f64::NAN;
+    let err = nlml(x.as_ref(), &y, &h).unwrap_err();
+    assert!(
+        matches!(&err, GpError::NonFinite { what, row: 4, col: 1, .. } if what == "GP training inputs"),
+        "{err:?}"
+    );
+    x[(4, 1)] = 0.0;
+    y[6] = f64::NAN;
+    let err = nlml_curb(x.as_ref(), &y, &h, &HypCurb::default()).unwrap_err();
+    assert!(
+        matches!(&err, GpError::NonFinite { what, row: 6, col: 0, .. } if what == "GP training targets"),
+        "{err:?}"
+    );
+}
