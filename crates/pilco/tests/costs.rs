@@ -285,3 +285,40 @@ fn invalid_costs_are_rejected() {
     assert!(CostSum::new(3, vec![]).is_err());
     assert!(EnergyCost::new(&[0.0], &[true]).is_err());
 }
+
+#[test]
+fn a_width_matrix_that_is_not_symmetric_psd_is_refused_naming_w() {
+    // Eigenvalues 3 and −1: E[exp(−½ xᵀWx)] diverges, yet |I + sW|^(−1/2) with s = 2I would
+    // give the finite expected cost 0.622.
+    let indefinite = Mat::from_fn(2, 2, |i, j| if i == j { 1.0 } else { 2.0 });
+    let err = SaturatingCost::new(&[0, 1], indefinite.as_ref(), &[0.0, 0.0]).unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        msg.contains("width matrix W") && msg.contains("positive semi-definite"),
+        "{msg}"
+    );
+    let asymmetric = Mat::from_fn(2, 2, |i, j| match (i, j) {
+        (0, 1) => 0.5,
+        (1, 0) => -0.5,
+        _ => 1.0,
+    });
+    let err = SaturatingCost::new(&[0, 1], asymmetric.as_ref(), &[0.0, 0.0]).unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        msg.contains("width matrix W") && msg.contains("not symmetric"),
+        "{msg}"
+    );
+    // Rank-deficient PSD widths (and their rounding) stay accepted.
+    let mut r = rng(31);
+    for n in [1, 2, 4] {
+        let w = rand_width(&mut r, n, 1, 3.0);
+        let dims: Vec<usize> = (0..n).collect();
+        SaturatingCost::new(&dims, w.as_ref(), &vec![0.0; n]).unwrap();
+    }
+    let zero = Mat::<f64>::zeros(2, 2);
+    SaturatingCost::new(&[0, 1], zero.as_ref(), &[0.0, 0.0]).unwrap();
+    // The cart-pole's tip-distance width: [[1, l], [l, l²]]/width² has a zero eigenvalue.
+    let (l, width) = (0.6, 0.25);
+    let tip = Mat::from_fn(2, 2, |i, j| [[1.0, l], [l, l * l]][i][j] / (width * width));
+    SaturatingCost::new(&[0, 1], tip.as_ref(), &[0.0, 0.0]).unwrap();
+}

@@ -50,7 +50,8 @@ pub struct SaturatingCost {
 
 impl SaturatingCost {
     /// A cost on the dimensions `dims` (distinct) of the state, with `|J|×|J|` width matrix
-    /// `w` (symmetric positive semi-definite; it is symmetrised) and target `z`.
+    /// `w` (symmetric positive semi-definite up to rounding, refused otherwise; the rounding
+    /// is symmetrised away) and target `z`.
     pub fn new(dims: &[usize], w: MatRef<'_, f64>, z: &[f64]) -> Result<Self> {
         let n = dims.len();
         if w.nrows() != n || w.ncols() != n {
@@ -87,7 +88,7 @@ impl SaturatingCost {
                 });
             }
         }
-        symmetrise(&mut w);
+        check_symmetric_psd(&mut w)?;
         Ok(Self {
             dims: dims.to_vec(),
             w,
@@ -127,6 +128,51 @@ impl SaturatingCost {
         }
         1.0 - (-0.5 * q).exp()
     }
+}
+
+/// Relative rounding (of `max |W|`) tolerated in W's asymmetry and negative eigenvalues: a
+/// width built as `A Aᵀ` or `2 S⁻¹` is PSD only up to a few ulps.
+const PSD_TOL: f64 = 1e-10;
+
+/// Refuse a W that is not symmetric PSD, then symmetrise it. Why: the Gaussian integral
+/// `E[exp(−½ xᵀWx)]` is finite only for PSD W (with an indefinite W it diverges, yet
+/// `|I + sW|^(−1/2)` would still give a finite, wrong number).
+fn check_symmetric_psd(w: &mut Mat<f64>) -> Result<()> {
+    let n = w.nrows();
+    let scale = (0..n)
+        .flat_map(|a| (0..n).map(move |b| (a, b)))
+        .fold(0.0f64, |acc, (a, b)| acc.max(w[(a, b)].abs()));
+    let tol = PSD_TOL * scale;
+    let invalid = |detail: String| PilcoError::Invalid {
+        what: "saturating cost width matrix W".into(),
+        detail,
+    };
+    for a in 0..n {
+        for b in 0..a {
+            if (w[(a, b)] - w[(b, a)]).abs() > tol {
+                return Err(invalid(format!(
+                    "not symmetric: entry ({a}, {b}) is {} but ({b}, {a}) is {}",
+                    w[(a, b)],
+                    w[(b, a)]
+                )));
+            }
+        }
+    }
+    symmetrise(w);
+    if n == 0 {
+        return Ok(());
+    }
+    let eig = w
+        .self_adjoint_eigenvalues(faer::Side::Lower)
+        .map_err(|e| invalid(format!("eigenvalues did not converge ({e:?})")))?;
+    // Sorted ascending: the first is the smallest.
+    if eig[0] < -tol {
+        return Err(invalid(format!(
+            "not positive semi-definite: smallest eigenvalue {:e}",
+            eig[0]
+        )));
+    }
+    Ok(())
 }
 
 /// The sum of several saturating costs on a D-dimensional state (PILCO's `lossSat` for one).
