@@ -322,3 +322,21 @@ fn a_width_matrix_that_is_not_symmetric_psd_is_refused_naming_w() {
     let tip = Mat::from_fn(2, 2, |i, j| [[1.0, l], [l, l * l]][i][j] / (width * width));
     SaturatingCost::new(&[0, 1], tip.as_ref(), &[0.0, 0.0]).unwrap();
 }
+
+#[test]
+fn an_indefinite_state_covariance_gives_nan_not_a_plausible_cost() {
+    // |I + sW| = −5 for W = I and s with eigenvalues 4 and −2: the Gaussian integral does not
+    // exist, and taking |det| would have returned a finite cost.
+    let sum = CostSum::loss_sat(Mat::<f64>::identity(2, 2).as_ref(), &[0.0, 0.0]).unwrap();
+    let s = Mat::from_fn(2, 2, |i, j| if i == j { 1.0 } else { 3.0 });
+    let (o, _) = sum.forward(&[0.0, 0.0], s.as_ref());
+    assert!(o.mean.is_nan(), "{}", o.mean);
+    // A PSD s still gives the closed form 1 − |I + s|^(−1/2) at m = z.
+    let s = Mat::from_fn(2, 2, |i, j| if i == j { 1.0 } else { 0.5 });
+    let (o, _) = sum.forward(&[0.0, 0.0], s.as_ref());
+    assert!(
+        (o.mean - (1.0 - 3.75f64.powf(-0.5))).abs() < 1e-14,
+        "{}",
+        o.mean
+    );
+}

@@ -76,7 +76,17 @@ impl GaussExp {
             amat[(a, a)] += 1.0;
         }
         let lu = amat.partial_piv_lu();
-        let det: f64 = (0..n).map(|a| lu.U()[(a, a)].abs()).product();
+        // |A| = ±Π U_aa, signed by the parity of the row pivoting (inversions; n = |J| is
+        // small). The sign is kept: |A| ≥ 1 for PSD s and W (module docs; `SaturatingCost::new`
+        // refuses any other W, and sums of PSD W_k are PSD), so |A| ≤ 0 means an indefinite s.
+        // Neither this nor `CostSum::forward` can return an error, so |A|^(−1/2) is then NaN
+        // for the caller's finiteness checks to report, where `abs` gave a finite, wrong cost.
+        let (perm, _) = lu.P().arrays();
+        let inversions: usize = (0..n)
+            .map(|a| (a + 1..n).filter(|&b| perm[a] > perm[b]).count())
+            .sum();
+        let sign = if inversions % 2 == 0 { 1.0 } else { -1.0 };
+        let det: f64 = sign * (0..n).map(|a| lu.U()[(a, a)]).product::<f64>();
         let gcol = MatRef::from_column_major_slice(&g, n, 1);
         let tcol = lu.solve_transpose(gcol);
         let t: Vec<f64> = (0..n).map(|a| tcol[(a, 0)]).collect();
