@@ -115,3 +115,25 @@ fn rbf_param_scales_put_centres_in_length_scale_units() {
         }
     }
 }
+
+#[test]
+fn rbf_log_lengthscales_of_the_wrong_shape_are_refused_naming_log_ls() {
+    use vicpilco_pilco::policy::RbfPolicy;
+    let (n, d, e) = (3, 2, 2);
+    let centres = Mat::from_fn(n, d, |i, c| (i * d + c) as f64);
+    let targets = Mat::from_fn(n, e, |i, a| 0.1 * (i + a) as f64);
+    // Too few columns used to panic on an index, too many were silently ignored, and a wrong
+    // row count was reported as another output's length-scales.
+    for (rows, cols) in [(d, e - 1), (d, e + 1), (d + 1, e)] {
+        let log_ls = Mat::<f64>::zeros(rows, cols);
+        let err = RbfPolicy::new(centres.clone(), targets.clone(), log_ls.as_ref(), 100.0)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("log_ls") && err.contains(&format!("got {rows}×{cols}")),
+            "{err}"
+        );
+    }
+    let log_ls = Mat::<f64>::zeros(d, e);
+    assert!(RbfPolicy::new(centres, targets, log_ls.as_ref(), 100.0).is_ok());
+}

@@ -45,6 +45,19 @@ impl RbfPolicy {
                 detail: format!("{snr} must be > 0"),
             });
         }
+        // Row d, column e is ℓ of input d for output e: another shape would index out of
+        // bounds (too few columns) or be silently ignored (too many).
+        if (log_ls.nrows(), log_ls.ncols()) != (centres.ncols(), targets.ncols()) {
+            return Err(PilcoError::Shape {
+                what: "RBF policy log length-scales log_ls".into(),
+                expected: format!(
+                    "{}×{} (one row per input, one column per output)",
+                    centres.ncols(),
+                    targets.ncols()
+                ),
+                got: format!("{}×{}", log_ls.nrows(), log_ls.ncols()),
+            });
+        }
         let log_sn = -snr.ln();
         let hyp = (0..targets.ncols())
             .map(|e| Hyper {
