@@ -293,6 +293,14 @@ where
         env: &mut dyn Environment,
         observer: &mut dyn LoopObserver,
     ) -> Result<Vec<Rollout>, LearnError> {
+        // The first update trains the dynamics GP on these roll-outs alone; refused here,
+        // before any roll-out runs, rather than by the GP after them.
+        if self.initial_rollouts == 0 && self.episodes > 0 {
+            return Err(LearnError::Spec(format!(
+                "initial_rollouts: 0 leaves the first of {} policy updates no data to train                  the dynamics GP on; at least 1 is needed",
+                self.episodes
+            )));
+        }
         let mut data: Vec<Rollout> = Vec::new();
         for i in 0..self.initial_rollouts {
             observer.phase(0, Phase::InitialRollout);

@@ -1,0 +1,129 @@
+//! Set-ups the learning loop must refuse before it touches the system.
+
+use faer::Mat;
+use vicpilco_env::{EnvError, Environment, Step, StepInfo};
+use vicpilco_gp::train::Wolfe;
+use vicpilco_gp::DynamicsOptions;
+use vicpilco_learn::outer::{LoopSetup, OptimiserOptions};
+use vicpilco_learn::selection::ModelSelection;
+use vicpilco_learn::start::StartDistribution;
+use vicpilco_learn::step::{StepSpec, Target};
+use vicpilco_learn::value::ReturnSpec;
+use vicpilco_learn::LearnError;
+use vicpilco_pilco::cost::{CostSum, SaturatingCost};
+use vicpilco_pilco::policy::LinearPolicy;
+
+/// A one-dimensional integrator `x' = x + a·dt` that counts how often it is used.
+#[derive(Default)]
+struct Integrator {
+    x: f64,
+    t: usize,
+    calls: usize,
+}
+
+impl Environment for Integrator {
+    fn state_dim(&self) -> usize {
+        1
+    }
+    fn action_dim(&self) -> usize {
+        1
+    }
+    fn dt(&self) -> f64 {
+        0.1
+    }
+    fn horizon(&self) -> usize {
+        5
+    }
+    fn state_names(&self) -> Vec<String> {
+        vec!["x".into()]
+    }
+    fn action_names(&self) -> Vec<String> {
+        vec!["a".into()]
+    }
+    fn reset(&mut self, start: &[f64], _seed: u64) -> Result<Vec<f64>, EnvError> {
+        self.calls += 1;
+        (self.x, self.t) = (start[0], 0);
+        Ok(vec![self.x])
+    }
+    fn step(&mut self, action: &[f64]) -> Result<Step, EnvError> {
+        self.calls += 1;
+        self.x += action[0] * self.dt();
+        self.t += 1;
+        Ok(Step {
+            observation: vec![self.x],
+            info: StepInfo {
+                t: self.t as f64 * self.dt(),
+                true_state: vec![self.x],
+                ..Default::default()
+            },
+            done: self.t == self.horizon(),
+        })
+    }
+}
+
+fn setup(initial_rollouts: usize, episodes: usize) -> LoopSetup<LinearPolicy> {
+    let spec = StepSpec {
+        state_dim: 1,
+        angles: vec![],
+        time_input: false,
+        policy_inputs: vec![0],
+        dyn_inputs: vec![0],
+        targets: vec![Target::Relative],
+        linear_prior: vec![],
+        dt: 0.1,
+    };
+    let width = Mat::from_fn(1, 1, |_, _| 1.0);
+    let cost = SaturatingCost::new(&[0], width.as_ref(), &[1.0]).unwrap();
+    let start_cov = Mat::from_fn(1, 1, |_, _| 0.01);
+    LoopSetup {
+        spec,
+        squash: None,
+        ret: ReturnSpec {
+            state_cost: Some(CostSum::new(1, vec![cost]).unwrap()),
+            cost_angles: vec![],
+            w_mean: 1.0,
+            w_std: 0.0,
+            energy: None,
+            gamma: 1.0,
+            horizon: 5,
+        },
+        prediction_starts: vec![(vec![0.0], start_cov.clone())],
+        env_start: StartDistribution::Gaussian {
+            mean: vec![0.0],
+            cov: start_cov,
+        },
+        prior_shift: None,
+        dynamics: DynamicsOptions::default(),
+        model_selection: ModelSelection::Likelihood,
+        optimiser: OptimiserOptions {
+            length: 2,
+            mfepls: 5,
+            memory: 5,
+            wolfe: Wolfe::PILCO,
+            scale_params: None,
+        },
+        initial_rollouts,
+        episodes,
+        rollouts_per_episode: 1,
+        policy: LinearPolicy::new(Mat::<f64>::zeros(1, 1).as_ref(), &[0.0]).unwrap(),
+        explore: Box::new(|_, t, _| vec![if t % 2 == 0 { 1.0 } else { -0.5 }]),
+        success: Box::new(|_| false),
+        seed: 1,
+    }
+}
+
+#[test]
+fn no_initial_rollouts_before_an_update_is_refused_before_the_system_runs() {
+    let mut env = Integrator::default();
+    let err = setup(0, 1).run(&mut env, &mut ()).err().expect("refused");
+    assert!(
+        matches!(&err, LearnError::Spec(msg) if msg.contains("initial_rollouts")),
+        "{err}"
+    );
+    assert_eq!(env.calls, 0, "the system was used before the refusal");
+    // Without updates there is nothing to fit, so no roll-out is needed.
+    setup(0, 0)
+        .run(&mut env, &mut ())
+        .map_err(|e| e.to_string())
+        .unwrap();
+}
