@@ -73,14 +73,28 @@ pub fn evaluate(
     opts: &EvaluateOptions,
 ) -> Result<Vec<UpdateEvaluation>, ExperimentError> {
     let cfg = recorded_arm_config(name, opts.run.config.as_deref(), opts.run.quick, "evaluate")?;
-    let n = opts
-        .starts
-        .or_else(|| cfg.vilta.as_ref().map(|v| v.evaluation_starts))
-        .filter(|&n| n > 0)
-        .ok_or_else(|| ExperimentError::Evaluate {
-            path: opts.run.from.clone(),
-            message: format!("`{name}` has no evaluation starts: give their number (--starts N)"),
-        })?;
+    let bad = |message: String| ExperimentError::Evaluate {
+        path: opts.run.from.clone(),
+        message,
+    };
+    let n = match opts.starts {
+        Some(0) => {
+            return Err(bad(
+                "--starts 0 leaves nothing to roll out: give N ≥ 1".into()
+            ))
+        }
+        Some(n) => n,
+        None => cfg
+            .vilta
+            .as_ref()
+            .map(|v| v.evaluation_starts)
+            .filter(|&n| n > 0)
+            .ok_or_else(|| {
+                bad(format!(
+                    "`{name}` has no evaluation starts: give their number (--starts N)"
+                ))
+            })?,
+    };
     let checkpoint = read_checkpoint(&opts.run.from, name, opts.run.seed, &arm_identity(&cfg)?)?;
     let completed = checkpoint.state.completed;
     let updates = match &opts.updates {

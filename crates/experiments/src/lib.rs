@@ -278,6 +278,13 @@ pub fn run(
     observer: &mut dyn LoopObserver,
 ) -> Result<Summary, ExperimentError> {
     let cfg = load_config(name, opts.config.as_deref())?;
+    if cfg.is_none() && opts.replay_from.is_some() {
+        // The classic runs have one model-selection rule, so nothing to replay under another.
+        return Err(ExperimentError::NotArm {
+            name: name.to_string(),
+            what: "--replay-from",
+        });
+    }
     prepare_out(opts)?;
     subnormals::run_flushed(|| match (cfg, name) {
         (Some(cfg), _) => run_arm(name, cfg, opts, observer),
@@ -309,6 +316,7 @@ fn run_classic<P, const N: usize>(
 where
     P: vicpilco_env::classic::ClassicSystem
         + vicpilco_env::classic::Dynamics<N>
+        + serde::Serialize
         + Send
         + Sync
         + 'static,
@@ -316,13 +324,11 @@ where
     if opts.quick {
         scn.opt_length = QUICK_LENGTH as usize;
     }
-    let identity = serde_json::Value::String(format!(
-        "{:#?}",
-        vicpilco_env::classic::Scenario {
-            policy_updates: 0,
-            ..scn.clone()
-        }
-    ));
+    let identity = serde_json::to_value(vicpilco_env::classic::Scenario {
+        policy_updates: 0,
+        ..scn.clone()
+    })
+    .map_err(|e| ExperimentError::Write(e.into()))?;
     scn.policy_updates = opts.episodes_or(scn.policy_updates);
     let config = serde_json::json!({ "scenario": format!("{scn:#?}") });
     let (setup, mut env) = classic::setup(scn, opts.seed)?;

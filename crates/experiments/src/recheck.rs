@@ -55,14 +55,14 @@ pub fn recheck(
              settings"
         ))
     })?;
-    if let Some(key) = first_difference(
+    if let Some(diff) = first_difference(
         &arm_identity(&recorded)?,
         &arm_identity(&cfg)?,
         String::new(),
     ) {
         return Err(bad(format!(
-            "recorded with different settings: `{key}` differs (give the run's own --config, and \
-             --quick for a --quick run)"
+            "recorded with different settings: {diff} (give the run's own --config, and --quick \
+             for a --quick run)"
         )));
     }
     let judged = checks::thesis_checks(&summary.experiment, &cfg, cfg.episodes, &summary);

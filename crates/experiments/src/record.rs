@@ -112,10 +112,15 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ExperimentError + '_ {
     }
 }
 
-/// Creates the run directory; a fresh run first refuses one that holds a run, before anything
-/// is written (`--replay-from` checks in [`crate::replay::graft`]).
+/// Creates the run directory of a fresh or replaying run; a fresh run first refuses one that
+/// holds a run, before anything is written (`--replay-from` checks in
+/// [`crate::replay::graft`]). A resumed run's directory must exist already.
 pub(crate) fn prepare_out(opts: &RunOptions) -> Result<(), ExperimentError> {
-    if !opts.resume && opts.replay_from.is_none() {
+    if opts.resume {
+        // Its checkpoint says whether there is anything to resume; no folder is made for it.
+        return Ok(());
+    }
+    if opts.replay_from.is_none() {
         refuse_recorded_run(&opts.out)?;
     }
     std::fs::create_dir_all(&opts.out).map_err(|e| ExperimentError::Io {
@@ -211,10 +216,15 @@ pub fn read_checkpoint(
     if cp.seed != seed {
         return Err(bad(format!("written with seed {}, not {seed}", cp.seed)));
     }
-    if let Some(key) = first_difference(&cp.identity, identity, String::new()) {
+    if let Some(diff) = first_difference(&cp.identity, identity, String::new()) {
+        let hint = if diff.is_quick_budget() {
+            "; a --quick run resumes with --quick"
+        } else {
+            ""
+        };
         return Err(bad(format!(
-            "written with different settings: `{key}` differs (only the number of updates may \
-             change on resume)"
+            "written with different settings: {diff} (only the number of updates may change on \
+             resume{hint})"
         )));
     }
     Ok(cp)
@@ -256,13 +266,48 @@ pub(crate) fn create_new(path: &Path) -> Result<std::fs::File, ExperimentError> 
         .map_err(io_err)
 }
 
-/// The first path at which two JSON values differ.
+/// Where two settings records first differ: the dotted key and both values.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Difference {
+    /// Dotted key, indexed in arrays, e.g. `optimiser.length` (`(root)` for two scalars).
+    pub key: String,
+    /// The value in the record (`a`), as JSON, or `absent`.
+    pub recorded: String,
+    /// The value now (`b`).
+    pub now: String,
+}
+
+impl Difference {
+    /// The one setting a `--quick` run changes, so the hint to add `--quick` applies.
+    pub fn is_quick_budget(&self) -> bool {
+        matches!(self.key.as_str(), "optimiser.length" | "opt_length")
+    }
+}
+
+impl std::fmt::Display for Difference {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "`{}` differs (recorded {}, now {})",
+            self.key, self.recorded, self.now
+        )
+    }
+}
+
+/// The first key at which two JSON values differ, with both values there.
 pub(crate) fn first_difference(
     a: &serde_json::Value,
     b: &serde_json::Value,
     at: String,
-) -> Option<String> {
+) -> Option<Difference> {
     use serde_json::Value::{Array, Object};
+    let shown = |v: Option<&serde_json::Value>| {
+        let text = v.map_or_else(|| "absent".to_string(), |v| v.to_string());
+        match text.char_indices().nth(60) {
+            Some((cut, _)) => format!("{}…", &text[..cut]),
+            None => text,
+        }
+    };
     match (a, b) {
         (Object(x), Object(y)) => {
             let mut keys: Vec<&String> = x.keys().chain(y.keys()).collect();
@@ -276,7 +321,11 @@ pub(crate) fn first_difference(
                 };
                 match (x.get(k), y.get(k)) {
                     (Some(u), Some(v)) => first_difference(u, v, path),
-                    _ => Some(path),
+                    (u, v) => Some(Difference {
+                        key: path,
+                        recorded: shown(u),
+                        now: shown(v),
+                    }),
                 }
             })
         }
@@ -286,7 +335,11 @@ pub(crate) fn first_difference(
             .enumerate()
             .find_map(|(i, (u, v))| first_difference(u, v, format!("{at}[{i}]"))),
         _ if a == b => None,
-        _ => Some(if at.is_empty() { "(root)".into() } else { at }),
+        _ => Some(Difference {
+            key: if at.is_empty() { "(root)".into() } else { at },
+            recorded: shown(Some(a)),
+            now: shown(Some(b)),
+        }),
     }
 }
 

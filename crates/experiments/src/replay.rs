@@ -160,14 +160,14 @@ fn open_source(
     let (mut a, mut b) = (recorded.identity.clone(), identity.clone());
     a["gp"]["model_selection"] = serde_json::Value::Null;
     b["gp"]["model_selection"] = serde_json::Value::Null;
-    if let Some(key) = crate::record::first_difference(&a, &b, String::new()) {
-        let hint = if key == "optimiser.length" {
+    if let Some(diff) = crate::record::first_difference(&a, &b, String::new()) {
+        let hint = if diff.is_quick_budget() {
             "; a --quick run is replayed with --quick"
         } else {
             ""
         };
         return Err(bad(format!(
-            "written with different settings: `{key}` differs (only gp.model_selection may{hint})"
+            "written with different settings: {diff} (only gp.model_selection may{hint})"
         )));
     }
     let policies = read_policies(source, recorded.state.completed)?;

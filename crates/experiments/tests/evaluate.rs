@@ -163,6 +163,14 @@ fn what_evaluate_cannot_do_is_an_error_naming_why() {
         &options(&run_dir, base.join("none.jsonl")),
     ));
     assert!(m.contains("--starts"), "{m}");
+    let m = message(evaluate(
+        "vilta-var",
+        &EvaluateOptions {
+            starts: Some(0),
+            ..options(&run_dir, base.join("zero.jsonl"))
+        },
+    ));
+    assert!(m.contains("--starts 0 leaves nothing"), "{m}");
 
     let m = message(evaluate(
         "pendulum",

@@ -297,7 +297,8 @@ where
         // before any roll-out runs, rather than by the GP after them.
         if self.initial_rollouts == 0 && self.episodes > 0 {
             return Err(LearnError::Spec(format!(
-                "initial_rollouts: 0 leaves the first of {} policy updates no data to train                  the dynamics GP on; at least 1 is needed",
+                "initial_rollouts: 0 leaves the first of {} policy updates no data to train \
+                 the dynamics GP on; at least 1 is needed",
                 self.episodes
             )));
         }

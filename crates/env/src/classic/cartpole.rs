@@ -67,7 +67,7 @@ use crate::EnvError;
 use std::f64::consts::PI;
 
 /// Physical constants of the cart-pole.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct CartPolePhysics {
     /// Pole length l, pivot to tip (m); the centre of mass is at l/2.
     pub pole_length: f64,

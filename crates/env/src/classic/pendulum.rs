@@ -68,7 +68,7 @@ use crate::EnvError;
 use std::f64::consts::PI;
 
 /// Physical constants of the pendulum (a uniform rod about one end).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PendulumPhysics {
     /// Rod length l (m).
     pub length: f64,

@@ -8,7 +8,7 @@ use rand::{Rng, RngExt};
 use rand_distr::{Distribution, StandardNormal};
 
 /// When an episode counts as solved (ours, not PILCO's). See the module docs.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct SuccessTest {
     /// Number of final states checked (10 = the last second at dt = 0.1 s).
     pub window: usize,
@@ -25,7 +25,7 @@ pub struct SuccessTest {
 /// `Scenario::<CartPolePhysics>::default()` are PILCO's published values (see the aliases
 /// [`PendulumScenario`](super::PendulumScenario) and [`CartPoleScenario`](super::CartPoleScenario)
 /// for the numbers and their sources).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Scenario<P> {
     /// Physical constants.
     pub physics: P,

@@ -103,9 +103,13 @@ pub(crate) fn check_moment_input(m: &[f64], s: MatRef<'_, f64>, d: usize) -> Res
     crate::linalg::check_finite(s, "moment-matching input covariance")?;
     // Only the diagonal, O(D) per call: a full PSD test would cost a factorisation on the hot
     // path, and the Cholesky of `s + Λ` that follows catches gross indefiniteness. A variance
-    // propagated as `E[x²] − E[x]²` (a known input, a deterministic start) may come out a few
-    // ulps below 0 of its second moment, so that much is rounding, not a caller's error.
-    if let Some(k) = (0..d).find(|&k| s[(k, k)] < -1e-12 * (1.0 + m[k] * m[k])) {
+    // propagated as `E[x²] − E[x]²` or as a difference of covariance terms (a known input, a
+    // deterministic start or time) may come out below 0 by rounding of its second moment or
+    // of the largest variance it was combined with; a margin well above that keeps a long
+    // prediction from failing on rounding while a caller's negative variance is refused.
+    let largest = (0..d).fold(0.0f64, |acc, k| acc.max(s[(k, k)].abs()));
+    let rounding = |k: usize| 1e-9 * (1.0 + m[k] * m[k] + largest);
+    if let Some(k) = (0..d).find(|&k| s[(k, k)] < -rounding(k)) {
         return Err(GpError::Numerical {
             what: "moment-matching input covariance".into(),
             detail: format!("negative variance s[{k}, {k}] = {} at index {k}", s[(k, k)]),
