@@ -8,11 +8,11 @@
 //! `thesis_reference` is rewritten; every recorded number stays as it was.
 
 use crate::checks;
-use crate::record::first_difference;
 use crate::summary::{write_json_atomic, Summary, ThesisCheck};
 use crate::summary_config::arm_settings;
 use crate::{arm_identity, recorded_arm_config, ExperimentError};
 use std::path::Path;
+use vicpilco_report::difference::first_difference;
 
 /// One claim whose judgement this build changes.
 #[derive(Clone, Debug, PartialEq)]

@@ -160,7 +160,7 @@ fn open_source(
     let (mut a, mut b) = (recorded.identity.clone(), identity.clone());
     a["gp"]["model_selection"] = serde_json::Value::Null;
     b["gp"]["model_selection"] = serde_json::Value::Null;
-    if let Some(diff) = crate::record::first_difference(&a, &b, String::new()) {
+    if let Some(diff) = vicpilco_report::difference::first_difference(&a, &b, String::new()) {
         let hint = if diff.is_quick_budget() {
             "; a --quick run is replayed with --quick"
         } else {

@@ -405,8 +405,21 @@ fn every_arm_run_selects_its_model_on_the_last_roll_out_and_says_it_is_ours() {
         };
         assert_eq!(c.gp.model_selection, rule, "{name}");
         assert!(c.ours_keys().contains(&"gp.model_selection"), "{name}");
-        let (setup, _) = arm::setup(&c, arm::rbf_policy(&c, 1).unwrap(), 1).unwrap();
-        assert_eq!(setup.model_selection, rule, "{name}");
+        let chosen = match c.policy.kind {
+            PolicyKind::Rbf => {
+                arm::setup(&c, arm::rbf_policy(&c, 1).unwrap(), 1)
+                    .unwrap()
+                    .0
+                    .model_selection
+            }
+            PolicyKind::Linear => {
+                arm::setup(&c, arm::linear_policy(&c, 1).unwrap(), 1)
+                    .unwrap()
+                    .0
+                    .model_selection
+            }
+        };
+        assert_eq!(chosen, rule, "{name}");
     }
     let text = config::shipped("vil-gic-rbf10").unwrap().1;
     let set = |value: &str| {

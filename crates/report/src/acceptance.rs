@@ -9,8 +9,10 @@
 //! when none is given, against every complete vil-gic run.
 
 use crate::data::{Claim, SeedRule, Summary};
+use crate::difference::first_difference;
 use crate::markdown::{cell, header, row};
 use crate::ReportError;
+use serde_json::Value;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -133,6 +135,7 @@ fn section(
         );
     }
     h.push('\n');
+    settings_note(h, runs);
     // Claims in the order the runs list them, each once.
     let mut keys: Vec<(&str, &Claim)> = Vec::new();
     for r in runs {
@@ -197,6 +200,34 @@ fn section(
         row(h, &cells);
     }
     h.push('\n');
+}
+
+/// Runs pooled under one name should share their settings (the number of updates aside):
+/// says where the first run that does not differs from the lowest seed's, so a verdict over
+/// a shipped run and a probe's, or a `--quick` one, is not read as one experiment's.
+fn settings_note(h: &mut String, runs: &[RunSummary]) {
+    let settings = |r: &RunSummary| {
+        let mut c = r.summary.config.clone().unwrap_or(Value::Null);
+        if let Some(map) = c.as_object_mut() {
+            map.remove("episodes");
+        }
+        c
+    };
+    let Some((first, rest)) = runs.split_first() else {
+        return;
+    };
+    let base = settings(first);
+    let differing = rest
+        .iter()
+        .find_map(|r| first_difference(&base, &settings(r), String::new()).map(|d| (r, d)));
+    if let Some((r, d)) = differing {
+        let _ = writeln!(
+            h,
+            "**These runs differ in their settings**, so the verdicts below pool different \
+             experiments: `{}` is {} in seed {} and {} in seed {}.\n",
+            d.key, d.recorded, first.summary.seed, d.now, r.summary.seed
+        );
+    }
 }
 
 /// SIC's whole-episode mean k_y against the GIC run of the same seed, decided only when both

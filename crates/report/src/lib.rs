@@ -22,6 +22,7 @@
 
 mod acceptance;
 mod data;
+pub mod difference;
 mod error;
 mod figures;
 mod html;

@@ -293,3 +293,28 @@ fn seeds_beyond_the_rules_are_shown_but_not_counted() {
     assert!(md.lines().any(|l| l.starts_with("- seed 6:")
         && l.ends_with("(beyond the acceptance seeds 1–5: shown, not counted)")));
 }
+
+#[test]
+fn runs_pooled_under_one_name_with_other_settings_are_pointed_out() {
+    let tmp = TempDir::new("acceptance-settings");
+    let run = |seed: u64, episodes: u64, length: u64| {
+        let dir = write_summary(tmp.path(), &format!("s{seed}"), "vilta", seed, 1.0, vec![]);
+        let file = dir.join("summary.json");
+        let mut summary: Value =
+            serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+        summary["config"] = json!({"episodes": episodes, "optimiser": {"length": length}});
+        std::fs::write(&file, summary.to_string()).unwrap();
+        dir
+    };
+    // The number of updates is not a setting that makes another experiment.
+    let same = [run(1, 20, 50), run(2, 25, 50)];
+    let md = acceptance_markdown(&same).unwrap();
+    assert!(!md.contains("differ in their settings"), "{md}");
+    // A --quick run among them is.
+    let mixed = [same[0].clone(), same[1].clone(), run(3, 3, 5)];
+    let md = acceptance_markdown(&mixed).unwrap();
+    assert!(
+        md.contains("`optimiser.length` is 50 in seed 1 and 5 in seed 3"),
+        "{md}"
+    );
+}
