@@ -42,8 +42,10 @@ enum Command {
     /// summary.json (per update: predicted and recorded return, success, interaction, training
     /// and optimisation time; the thesis's numbers beside the run's), rollouts.jsonl,
     /// predictions.jsonl and policies.jsonl (every roll-out, long-term prediction and policy,
-    /// appended as recorded), checkpoint.json (for --resume), policy.json (final policy and
-    /// dynamics hyper-parameters), and the plots, report.html and report.md.
+    /// appended as recorded), checkpoint.json (for --resume), policy.json (the last update's
+    /// policy and dynamics hyper-parameters; under vilta.final_policy = "most-successful" the
+    /// policy handed over is policies.jsonl's line of summary.json's final_eval.update), and
+    /// the plots, report.html and report.md.
     Run(run_cmd::Args),
     /// Check vicpilco's maths against reference values from the original PILCO MATLAB code.
     ///
@@ -92,8 +94,9 @@ enum Command {
     /// Roll out any update's policy of a recorded arm run from fresh starts.
     ///
     /// Reads the run's policies.jsonl and rolls each chosen update's policy out from the final
-    /// evaluation's starts (the same starts and sensor noise for every policy; the last
-    /// update's results repeat the run's final_eval.jsonl). Writes one JSON line per update
+    /// evaluation's starts (the same starts and sensor noise for every policy; the results of
+    /// the update whose policy the run handed over, final_eval.jsonl's, repeat that file).
+    /// Writes one JSON line per update
     /// (each start's y, success, return, end position, largest force) and prints how many
     /// starts insert per update.
     Evaluate(evaluate_cmd::Args),

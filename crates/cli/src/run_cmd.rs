@@ -21,8 +21,9 @@ pub struct Args {
     /// Smoke test: 3 policy updates with 5 line searches each.
     #[arg(long)]
     quick: bool,
-    /// Read the thesis run's settings from this TOML file instead of the shipped one (NAME
-    /// then only labels the run).
+    /// Read the thesis run's settings from this TOML file instead of the shipped one. Under a
+    /// shipped NAME the file must be a variant of it (same task, controller, policy.kind and
+    /// fixed or variable start); any other NAME labels a variant of one's own.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
     /// Continue the run in DIR from its checkpoint.json (same name, seed and settings; the

@@ -66,8 +66,9 @@ pub struct UpdateEvaluation {
 /// from fresh starts; write one JSON line per update to `opts.run.out` as each is done, then
 /// [`markdown_table`] of them to [`table_path`], and return them. The run's settings must
 /// equal the config's (all but the number of updates), so the starts, the simulator and the
-/// success test are the run's own; the last update's line then repeats the run's
-/// `final_eval.jsonl`.
+/// success test are the run's own; the line of the update whose policy the run handed over
+/// (`final_eval.update` in its summary: the last one, or under `vilta.final_policy =
+/// "most-successful"` the kept one) then repeats the run's `final_eval.jsonl`.
 pub fn evaluate(
     name: &str,
     opts: &EvaluateOptions,

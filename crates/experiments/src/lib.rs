@@ -11,7 +11,8 @@
 //! * `policies.jsonl` — the parameters of the policy each update rolled out (episode 0: the
 //!   untrained policy the first update starts from), in [`Policy::params`]' order;
 //! * `checkpoint.json` — what `--resume` needs to continue bit for bit;
-//! * `policy.json` — the final policy parameters and dynamics hyper-parameters;
+//! * `policy.json` — the last update's policy parameters and dynamics hyper-parameters (the
+//!   policy a `most-successful` run hands over is `policies.jsonl`'s at `final_eval.update`);
 //! * `final_eval.jsonl` — runs with evaluation starts: the final policy from fresh starts
 //!   (any update's policy: [`evaluate`]);
 //! * `report.html`, `report.md` and the plots (PNG, SVG) — [`vicpilco_report`], rewritten

@@ -53,7 +53,8 @@ pub struct EpisodeRecord {
     /// 1-based policy update.
     pub index: usize,
     /// `Σ_t γ^t (w1 E[c] + w3 E[c_a])` predicted for the optimised policy (no exploration
-    /// term).
+    /// term), from the first of the set-up's prediction starts only: with several (K > 1)
+    /// the optimised objective averages them, but a roll-out starts from one state.
     pub predicted_return_mean: f64,
     /// `Σ_t γ^t w1 std[c_t]`: the spread of the return if step costs are perfectly
     /// correlated (ours: moment matching gives no cross-step covariances).
@@ -129,7 +130,9 @@ pub struct LoopState {
     pub completed: usize,
     /// The GP's training roll-outs, in order.
     pub data: Vec<Rollout>,
-    /// Dynamics hyper-parameters of the last fit (the next fit's warm start).
+    /// Dynamics hyper-parameters of the model the last update chose: its refit, or under a
+    /// comparing [`crate::selection::ModelSelection`] possibly the previous ones kept (the
+    /// next fit's warm start either way).
     pub hyp: Option<Vec<Hyper>>,
     /// Inducing inputs of the last sparse fit, rows (the next sparse fit's warm start).
     pub inducing: Option<Vec<Vec<f64>>>,

@@ -127,3 +127,44 @@ fn no_initial_rollouts_before_an_update_is_refused_before_the_system_runs() {
         .map_err(|e| e.to_string())
         .unwrap();
 }
+
+/// Each part that must fit the others or the system is checked before the first reset, and the
+/// error names it: what would otherwise panic deep in a prediction, or after a roll-out.
+#[test]
+fn parts_that_do_not_fit_are_refused_before_the_system_runs() {
+    type Spoil = fn(&mut LoopSetup<LinearPolicy>);
+    let cases: [(&str, Spoil); 7] = [
+        ("prior_shift", |s| s.prior_shift = Some(vec![vec![0.0]; 4])),
+        ("prior_shift", |s| {
+            s.prior_shift = Some(vec![vec![0.0, 1.0]; 5])
+        }),
+        ("prediction_starts", |s| {
+            s.prediction_starts = vec![(vec![0.0, 0.0], Mat::zeros(2, 2))]
+        }),
+        ("prediction_starts", |s| s.prediction_starts.clear()),
+        ("ret.horizon", |s| s.ret.horizon = 6),
+        ("ret.cost_angles", |s| s.ret.cost_angles = vec![1]),
+        ("policy_inputs", |s| s.spec.policy_inputs = vec![0, 0]),
+    ];
+    for (field, spoil) in cases {
+        let mut env = Integrator::default();
+        let mut bad = setup(1, 1);
+        spoil(&mut bad);
+        let err = bad.run(&mut env, &mut ()).err().expect("refused");
+        assert!(
+            matches!(&err, LearnError::Spec(msg) if msg.starts_with(field)),
+            "{field}: {err}"
+        );
+        assert_eq!(
+            env.calls, 0,
+            "{field}: the system was used before the refusal"
+        );
+    }
+    // The unspoilt set-up runs.
+    let mut env = Integrator::default();
+    setup(1, 1)
+        .run(&mut env, &mut ())
+        .map_err(|e| e.to_string())
+        .unwrap();
+    assert!(env.calls > 0);
+}
