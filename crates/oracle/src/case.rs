@@ -4,6 +4,7 @@ use crate::OracleError;
 use faer::Mat;
 use serde_json::{Map, Value};
 use std::path::{Path, PathBuf};
+use vicpilco_gp::Hyper;
 
 /// A dense array of any rank, row-major (last index fastest), as the oracle stores it.
 #[derive(Clone, Debug, PartialEq)]
@@ -218,6 +219,61 @@ impl Case {
                 }
             })
             .collect()
+    }
+
+    /// PILCO's hyper-parameter matrix `name`, one column `[log ℓ_1..log ℓ_D; log σ_f; log σ_n]`
+    /// per output: fails unless it has at least 3 rows (D ≥ 1).
+    pub fn pilco_hyp(&self, name: &str) -> Result<Mat<f64>, OracleError> {
+        let hyp = self.mat(name)?;
+        if hyp.nrows() < 3 {
+            return Err(self.bad(
+                name,
+                &format!(
+                    "expected rows [log ℓ_1..log ℓ_D; log σ_f; log σ_n] with D ≥ 1, got {} rows",
+                    hyp.nrows()
+                ),
+            ));
+        }
+        Ok(hyp)
+    }
+
+    /// [`Self::pilco_hyp`] as one [`Hyper`] per column (output).
+    pub fn hypers(&self, name: &str) -> Result<Vec<Hyper>, OracleError> {
+        let hyp = self.pilco_hyp(name)?;
+        Ok((0..hyp.ncols())
+            .map(|e| Hyper::from_pilco(&(0..hyp.nrows()).map(|r| hyp[(r, e)]).collect::<Vec<_>>()))
+            .collect())
+    }
+
+    /// One output's PILCO hyper-parameter vector `name` (`[log ℓ; log σ_f; log σ_n]`, at least
+    /// 3 entries).
+    pub fn hyper(&self, name: &str) -> Result<Hyper, OracleError> {
+        let col = self.vec(name)?;
+        if col.len() < 3 {
+            return Err(self.bad(
+                name,
+                &format!(
+                    "expected [log ℓ_1..log ℓ_D, log σ_f, log σ_n] with D ≥ 1, got {} entries",
+                    col.len()
+                ),
+            ));
+        }
+        Ok(Hyper::from_pilco(&col))
+    }
+
+    /// The Gaussian input `m` (length `d`) and `s` (`d`×`d`) of a moment-matching case.
+    pub fn gaussian_input(&self, d: usize) -> Result<(Vec<f64>, Mat<f64>), OracleError> {
+        let (m, s) = (self.vec("m")?, self.mat("s")?);
+        if m.len() != d {
+            return Err(self.bad("m", &format!("expected length {d}, got {}", m.len())));
+        }
+        if (s.nrows(), s.ncols()) != (d, d) {
+            return Err(self.bad(
+                "s",
+                &format!("expected {d}×{d}, got {}×{}", s.nrows(), s.ncols()),
+            ));
+        }
+        Ok((m, s))
     }
 
     /// A nested object (e.g. `prop1` of the value cases) as a case of its own.

@@ -128,6 +128,13 @@ pub fn discover(dir: &Path) -> Result<BTreeMap<String, Vec<PathBuf>>, OracleErro
             .map(|e| e.path())
             .filter(|f| f.extension().is_some_and(|x| x == "json"))
             .collect();
+        // A kind whose cases went missing must not read as a kind that passes.
+        if files.is_empty() {
+            return Err(OracleError::Dir {
+                path: p,
+                detail: "holds no case files (*.json)".into(),
+            });
+        }
         files.sort();
         out.insert(kind, files);
     }

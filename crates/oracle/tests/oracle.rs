@@ -190,3 +190,51 @@ fn value_matches_pilco() {
         ],
     );
 }
+
+/// A case file damaged in a field's shape is an error naming the field, never a panic (one bad
+/// file must not take the whole run with it); a kind folder with no case files is an error,
+/// not a kind that passes.
+#[test]
+fn malformed_cases_are_errors_naming_the_field() {
+    let Some(dir) = oracle_dir() else { return };
+    let found = discover(&dir).expect("oracle directory readable");
+    let scratch = std::env::temp_dir().join(format!("vicpilco-oracle-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&scratch).unwrap();
+    fn longer(v: &serde_json::Value) -> serde_json::Value {
+        let mut a = v.as_array().unwrap().clone();
+        a.push(serde_json::json!(0.1));
+        serde_json::Value::Array(a)
+    }
+    type Damage = fn(&serde_json::Value) -> serde_json::Value;
+    let damages: [(&str, &str, Damage); 6] = [
+        ("congp", "hyp", |_| serde_json::json!([[0.5]])),
+        ("gp0", "hyp", |_| serde_json::json!([[0.5]])),
+        ("nlml", "hyp", |_| serde_json::json!([0.5])),
+        ("gSat", "m", longer),
+        ("gTrig", "m", longer),
+        ("conlin", "m", longer),
+    ];
+    for (kind, field, damage) in damages {
+        let original = &found[kind][0];
+        let mut json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(original).unwrap()).unwrap();
+        json[field] = damage(&json[field]);
+        let file = scratch.join(format!("{kind}.json"));
+        std::fs::write(&file, json.to_string()).unwrap();
+        let checker = checkers().into_iter().find(|c| c.kind() == kind).unwrap();
+        let err = Case::load(&file)
+            .and_then(|case| checker.check(&case))
+            .err()
+            .unwrap_or_else(|| panic!("{kind}: a damaged `{field}` passed"));
+        assert!(
+            err.to_string()
+                .contains(&format!(": field `{field}`: expected")),
+            "{kind}: {err}"
+        );
+    }
+    let empty = scratch.join("empty");
+    std::fs::create_dir_all(empty.join("gp0")).unwrap();
+    let err = discover(&empty).unwrap_err().to_string();
+    assert!(err.contains("holds no case files"), "{err}");
+    std::fs::remove_dir_all(&scratch).ok();
+}

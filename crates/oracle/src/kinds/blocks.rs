@@ -150,7 +150,7 @@ pub(crate) fn check_policy<P: vicpilco_pilco::policy::Policy>(
             "the policy's sizes disagree with D and P",
         ));
     }
-    let (m, s) = (case.vec("m")?, case.mat("s")?);
+    let (m, s) = case.gaussian_input(d)?;
     let (outputs, cache) = pol
         .forward(&m, s.as_ref())
         .map_err(|e| compute_err(case, e))?;

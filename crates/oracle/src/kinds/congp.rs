@@ -14,7 +14,7 @@ pub(crate) fn rbf_policy(
     inputs: &str,
     targets: &str,
 ) -> Result<RbfPolicy, OracleError> {
-    let hyp = case.mat(hyp)?;
+    let hyp = case.pilco_hyp(hyp)?;
     let d = hyp.nrows() - 2;
     let log_ls = faer::Mat::from_fn(d, hyp.ncols(), |r, c| hyp[(r, c)]);
     RbfPolicy::new(

@@ -8,7 +8,7 @@ use super::blocks::compute_err;
 use crate::{compare, Case, Class, Comparison, KindChecker, OracleError, Tensor, Tolerance};
 use faer::Mat;
 use vicpilco_gp::moments::{backward, forward, MmCache, MmModel, Moments, MomentsAdjoint};
-use vicpilco_gp::{GpModel, Hyper, SparseGpModel};
+use vicpilco_gp::{GpModel, SparseGpModel};
 
 pub struct Gp0;
 pub struct Gp2;
@@ -17,11 +17,7 @@ pub struct Gp1;
 pub(crate) fn load_gp(case: &Case) -> Result<GpModel, OracleError> {
     let inputs = case.mat("inputs")?;
     let targets = case.mat("targets")?;
-    let hyp = case.mat("hyp")?;
-    let hyps = (0..hyp.ncols())
-        .map(|e| Hyper::from_pilco(&(0..hyp.nrows()).map(|r| hyp[(r, e)]).collect::<Vec<_>>()))
-        .collect();
-    GpModel::new(inputs, targets, hyps).map_err(|e| compute_err(case, e))
+    GpModel::new(inputs, targets, case.hypers("hyp")?).map_err(|e| compute_err(case, e))
 }
 
 /// Which output entry a unit adjoint selects.
@@ -230,14 +226,10 @@ impl KindChecker for Gp1 {
         "gp1"
     }
     fn check(&self, case: &Case) -> Result<Vec<Comparison>, OracleError> {
-        let hyp = case.mat("hyp")?;
-        let hyps = (0..hyp.ncols())
-            .map(|e| Hyper::from_pilco(&(0..hyp.nrows()).map(|r| hyp[(r, e)]).collect::<Vec<_>>()))
-            .collect();
         let gp = SparseGpModel::new(
             case.mat("inputs")?.as_ref(),
             case.mat("targets")?.as_ref(),
-            hyps,
+            case.hypers("hyp")?,
             case.mat("induce")?,
         )
         .map_err(|e| compute_err(case, e))?;

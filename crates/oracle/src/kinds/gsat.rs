@@ -15,7 +15,7 @@ impl KindChecker for GSat {
         let d = case.usize("d")?;
         let idx = case.indices_1based("i_1based")?;
         let sat = SineSat::new(d, &idx, &case.vec("e")?).map_err(|e| compute_err(case, e))?;
-        let (m, s) = (case.vec("m")?, case.mat("s")?);
+        let (m, s) = case.gaussian_input(d)?;
         let (outputs, cache) = sat.forward(&m, s.as_ref());
         check_moment_block(case, d, 0, "C", &outputs, |bar| {
             (sat.backward(&cache, bar), Vec::new())

@@ -15,7 +15,7 @@ impl KindChecker for GTrig {
         let d = case.usize("d")?;
         let idx = case.indices_1based("i_1based")?;
         let trig = TrigAug::new(d, &idx, &case.vec("e")?).map_err(|e| compute_err(case, e))?;
-        let (m, s) = (case.vec("m")?, case.mat("s")?);
+        let (m, s) = case.gaussian_input(d)?;
         let (outputs, cache) = trig.forward(&m, s.as_ref());
         check_moment_block(case, d, 0, "C", &outputs, |bar| {
             (trig.backward(&cache, bar), Vec::new())

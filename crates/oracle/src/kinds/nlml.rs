@@ -3,7 +3,6 @@
 
 use crate::{compare, Case, Class, Comparison, KindChecker, OracleError, Tensor, Tolerance};
 use vicpilco_gp::train::{input_std, nlml, HypCurb};
-use vicpilco_gp::Hyper;
 
 pub struct Nlml;
 
@@ -15,7 +14,7 @@ impl KindChecker for Nlml {
     fn check(&self, case: &Case) -> Result<Vec<Comparison>, OracleError> {
         let inputs = case.mat("inputs")?;
         let targets = case.vec("targets")?;
-        let hyp = Hyper::from_pilco(&case.vec("hyp")?);
+        let hyp = case.hyper("hyp")?;
         let curb = HypCurb {
             power: case.usize("curb_power")? as i32,
             ls: case.scalar("curb_ls")?,

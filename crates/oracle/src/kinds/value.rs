@@ -7,7 +7,7 @@ use super::congp::rbf_policy;
 use crate::{Case, Class, Comparison, KindChecker, OracleError, Tensor};
 use faer::Mat;
 use vicpilco_gp::moments::MmModel;
-use vicpilco_gp::{GpModel, Hyper};
+use vicpilco_gp::GpModel;
 use vicpilco_learn::step::{Predictor, StepSpec, Target};
 use vicpilco_learn::value::{value, ReturnSpec};
 use vicpilco_pilco::cost::CostSum;
@@ -18,12 +18,12 @@ use vicpilco_pilco::GaussianBar;
 pub struct Value;
 
 fn dynamics(case: &Case) -> Result<GpModel, OracleError> {
-    let hyp = case.mat("dyn_hyp")?;
-    let hyps = (0..hyp.ncols())
-        .map(|e| Hyper::from_pilco(&(0..hyp.nrows()).map(|r| hyp[(r, e)]).collect::<Vec<_>>()))
-        .collect();
-    GpModel::new(case.mat("dyn_inputs")?, case.mat("dyn_targets")?, hyps)
-        .map_err(|e| compute_err(case, e))
+    GpModel::new(
+        case.mat("dyn_inputs")?,
+        case.mat("dyn_targets")?,
+        case.hypers("dyn_hyp")?,
+    )
+    .map_err(|e| compute_err(case, e))
 }
 
 fn check_with<P: Policy + Sync>(case: &Case, policy: &P) -> Result<Vec<Comparison>, OracleError>
