@@ -45,7 +45,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             t.grad_norm_inputs_targets
         );
         println!(
-            "  trained nlml per output: {:?}",
+            "  trained nlml + hypCurb penalty per output: {:?}",
             t.train_nlml
                 .iter()
                 .map(|v| (v * 10.0).round() / 10.0)

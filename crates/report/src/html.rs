@@ -200,7 +200,7 @@ fn episodes(h: &mut String, run: &Run) {
         return;
     }
     h.push_str(
-        "<table class=\"episodes\">\n<thead><tr><th>update</th><th>predicted return</th>\
+        "<table class=\"episodes\">\n<thead><tr><th>update</th><th>predicted return (mean ± 1σ)</th>\
          <th>recorded return</th><th>outcome</th><th>success fraction</th><th>train [s]</th>\
          <th>optimise [s]</th><th>evaluations</th></tr></thead>\n<tbody>\n",
     );
@@ -252,7 +252,7 @@ fn thesis(h: &mut String, run: &Run) {
         let (class, verdict) = match c.pass {
             Some(true) => ("pass", "PASS"),
             Some(false) => ("fail", "FAIL"),
-            None => ("na", "n.a."),
+            None => ("na", "undecided"),
         };
         let _ = writeln!(
             h,

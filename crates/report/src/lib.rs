@@ -11,8 +11,9 @@
 //! * arm runs: `paths` (x–y paths with wall and hole) and, with final_eval.jsonl, `final_eval`;
 //!
 //! each as PNG and SVG, `report.html` with the settings, per-update results, the thesis
-//! comparison, totals and every PNG inlined, and `report.md` with the same tables as
-//! Markdown. Runs from before a file or field existed still get a report; what could not be
+//! comparison, totals and every PNG inlined, and `report.md` with those tables as Markdown,
+//! the per-update and totals tables with more columns (end position, largest force, GP
+//! points, model, gains) than the page's. Runs from before a file or field existed still get a report; what could not be
 //! drawn is listed in it.
 //!
 //! [`acceptance_markdown`] reads the summary.json of several runs and tabulates each thesis claim

@@ -56,7 +56,7 @@ fn episodes(h: &mut String, run: &Run) {
     // Columns read from the recorded roll-outs: the final y (where a VILTA run that did not
     // insert is pressing: below or above the hole) and the gains.
     let recorded = arm && run.rollouts.is_some();
-    let mut names = vec!["update", "predicted", "recorded", "colour"];
+    let mut names = vec!["update", "predicted (mean ± 1σ)", "recorded", "colour"];
     if arm {
         names.push("final x (m)");
     }

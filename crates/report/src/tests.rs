@@ -89,7 +89,7 @@ fn vil_run_gets_every_plot_but_final_eval() {
         "geometry.wall_x",
         "class=\"pass\">PASS",
         "class=\"fail\">FAIL",
-        "class=\"na\">n.a.",
+        "class=\"na\">undecided",
         "swatch green",
         "swatch red",
         "205.8",
