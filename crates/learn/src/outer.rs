@@ -567,7 +567,14 @@ where
                 max_line_search_evals: Some(self.optimiser.mfepls),
                 wolfe: self.optimiser.wolfe,
             };
-            let result = minimize(&mut objective, q0, &opts);
+            // The optimiser's first evaluation is at q0: it gets the one made above rather than
+            // a second value+gradient pass over the horizon.
+            let mut at_start = start.map(|value| (q0.clone(), value));
+            let mut objective_once_at_start = |q: &[f64]| match at_start.take() {
+                Some((q_start, value)) if q == q_start.as_slice() => Some(value),
+                _ => objective(q),
+            };
+            let result = minimize(&mut objective_once_at_start, q0, &opts);
             let result = result.ok_or_else(|| match first_failure.take() {
                 Some(cause) => cause,
                 None if start_finite => LearnError::Spec(format!(

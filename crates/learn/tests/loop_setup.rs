@@ -168,3 +168,32 @@ fn parts_that_do_not_fit_are_refused_before_the_system_runs() {
         .unwrap();
     assert!(env.calls > 0);
 }
+
+/// Every value+gradient pass of a policy update is one the optimiser counts: the start point's,
+/// made first to name a failure there, is handed to the optimiser rather than computed twice.
+#[test]
+fn each_update_evaluates_its_start_point_once() {
+    #[derive(Default)]
+    struct Count {
+        passes: std::collections::BTreeMap<usize, usize>,
+        counted: Vec<(usize, usize)>,
+    }
+    impl vicpilco_learn::record::LoopObserver for Count {
+        fn objective(&mut self, episode: usize, _j: f64) {
+            *self.passes.entry(episode).or_default() += 1;
+        }
+        fn episode_done(&mut self, record: &vicpilco_learn::record::EpisodeRecord) {
+            self.counted.push((record.index, record.evaluations));
+        }
+    }
+    let mut count = Count::default();
+    setup(1, 2)
+        .run(&mut Integrator::default(), &mut count)
+        .map_err(|e| e.to_string())
+        .unwrap();
+    assert_eq!(count.counted.len(), 2);
+    for (episode, evaluations) in &count.counted {
+        assert!(*evaluations > 0);
+        assert_eq!(count.passes[episode], *evaluations, "update {episode}");
+    }
+}
