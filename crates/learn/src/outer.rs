@@ -213,13 +213,7 @@ where
                     format!("{} rows for a horizon of {h} (one per step)", shift.len()),
                 );
             }
-            if let Some((t, _)) = shift
-                .iter()
-                .enumerate()
-                .find(|(_, r)| r.len() != d0 || r.iter().any(|v| !v.is_finite()))
-            {
-                return bad("prior_shift", format!("row {t} is not {d0} finite numbers"));
-            }
+            crate::step::check_prior_rows(shift, d0)?;
         }
         if self.prediction_starts.is_empty() {
             return bad("prediction_starts", "none given (at least one)".into());

@@ -167,6 +167,21 @@ impl StepSpec {
     }
 }
 
+/// Each row of a prior shift must be `d0` finite numbers (the row count is the loop's to
+/// check against its horizon, [`crate::outer::LoopSetup::check_against`]).
+pub(crate) fn check_prior_rows(shift: &[Vec<f64>], d0: usize) -> Result<(), LearnError> {
+    match shift
+        .iter()
+        .enumerate()
+        .find(|(_, r)| r.len() != d0 || r.iter().any(|v| !v.is_finite()))
+    {
+        Some((t, row)) => Err(LearnError::Spec(format!(
+            "prior_shift: row {t} ({row:?}) is not {d0} finite numbers"
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// Everything a step needs: its shape, the policy (with optional squashing), the dynamics GP
 /// and the optional prior mean.
 pub struct Predictor<'a, P: Policy> {
@@ -214,16 +229,7 @@ impl<'a, P: Policy> Predictor<'a, P> {
             dynamics.output_dim(),
         )?;
         if let Some(shift) = prior_shift {
-            if let Some((t, row)) = shift
-                .iter()
-                .enumerate()
-                .find(|(_, r)| r.len() != spec.state_dim || r.iter().any(|v| !v.is_finite()))
-            {
-                return Err(LearnError::Spec(format!(
-                    "prior mean row {t}: {row:?} is not {} finite numbers",
-                    spec.state_dim
-                )));
-            }
+            check_prior_rows(shift, spec.state_dim)?;
         }
         let trig = if spec.angles.is_empty() {
             None

@@ -221,19 +221,23 @@ impl Case {
             .collect()
     }
 
-    /// PILCO's hyper-parameter matrix `name`, one column `[log ℓ_1..log ℓ_D; log σ_f; log σ_n]`
-    /// per output: fails unless it has at least 3 rows (D ≥ 1).
+    /// A PILCO hyper-parameter column `[log ℓ_1..log ℓ_D; log σ_f; log σ_n]` of field `name`
+    /// needs D ≥ 1, so at least 3 entries.
+    fn check_hyp_len(&self, name: &str, len: usize) -> Result<(), OracleError> {
+        if len >= 3 {
+            return Ok(());
+        }
+        Err(self.bad(
+            name,
+            &format!("expected [log ℓ_1..log ℓ_D; log σ_f; log σ_n] with D ≥ 1, got {len} entries"),
+        ))
+    }
+
+    /// PILCO's hyper-parameter matrix `name`, one column per output (see
+    /// [`Self::hyper`]).
     pub fn pilco_hyp(&self, name: &str) -> Result<Mat<f64>, OracleError> {
         let hyp = self.mat(name)?;
-        if hyp.nrows() < 3 {
-            return Err(self.bad(
-                name,
-                &format!(
-                    "expected rows [log ℓ_1..log ℓ_D; log σ_f; log σ_n] with D ≥ 1, got {} rows",
-                    hyp.nrows()
-                ),
-            ));
-        }
+        self.check_hyp_len(name, hyp.nrows())?;
         Ok(hyp)
     }
 
@@ -245,19 +249,11 @@ impl Case {
             .collect())
     }
 
-    /// One output's PILCO hyper-parameter vector `name` (`[log ℓ; log σ_f; log σ_n]`, at least
-    /// 3 entries).
+    /// One output's PILCO hyper-parameter vector `name`: `[log ℓ_1..log ℓ_D, log σ_f,
+    /// log σ_n]`, at least 3 entries.
     pub fn hyper(&self, name: &str) -> Result<Hyper, OracleError> {
         let col = self.vec(name)?;
-        if col.len() < 3 {
-            return Err(self.bad(
-                name,
-                &format!(
-                    "expected [log ℓ_1..log ℓ_D, log σ_f, log σ_n] with D ≥ 1, got {} entries",
-                    col.len()
-                ),
-            ));
-        }
+        self.check_hyp_len(name, col.len())?;
         Ok(Hyper::from_pilco(&col))
     }
 
