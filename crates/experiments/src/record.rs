@@ -218,14 +218,10 @@ pub fn read_checkpoint(
         return Err(bad(format!("written with seed {}, not {seed}", cp.seed)));
     }
     if let Some(diff) = first_difference(&cp.identity, identity, String::new()) {
-        let hint = if diff.is_quick_budget() {
-            "; a --quick run resumes with --quick"
-        } else {
-            ""
-        };
         return Err(bad(format!(
             "written with different settings: {diff} (only the number of updates may change on \
-             resume{hint})"
+             resume{})",
+            diff.quick_hint("resumes")
         )));
     }
     Ok(cp)

@@ -161,13 +161,9 @@ fn open_source(
     a["gp"]["model_selection"] = serde_json::Value::Null;
     b["gp"]["model_selection"] = serde_json::Value::Null;
     if let Some(diff) = vicpilco_report::difference::first_difference(&a, &b, String::new()) {
-        let hint = if diff.is_quick_budget() {
-            "; a --quick run is replayed with --quick"
-        } else {
-            ""
-        };
         return Err(bad(format!(
-            "written with different settings: {diff} (only gp.model_selection may{hint})"
+            "written with different settings: {diff} (only gp.model_selection may{})",
+            diff.quick_hint("is replayed")
         )));
     }
     let policies = read_policies(source, recorded.state.completed)?;

@@ -13,9 +13,13 @@ pub struct Difference {
 }
 
 impl Difference {
-    /// The one setting a `--quick` run changes, so the hint to add `--quick` applies.
-    pub fn is_quick_budget(&self) -> bool {
-        matches!(self.key.as_str(), "optimiser.length" | "opt_length")
+    /// `"; a --quick run {is_read} with --quick"` when the difference is in the one setting a
+    /// `--quick` run changes (its optimiser budget), else nothing: the likely cause, named.
+    pub fn quick_hint(&self, is_read: &str) -> String {
+        match self.key.as_str() {
+            "optimiser.length" | "opt_length" => format!("; a --quick run {is_read} with --quick"),
+            _ => String::new(),
+        }
     }
 }
 
@@ -76,5 +80,45 @@ pub fn first_difference(
             recorded: shown(Some(a)),
             now: shown(Some(b)),
         }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    #[test]
+    fn the_first_differing_key_is_named_with_both_values() {
+        let a = json!({"gp": {"floor": [1.0, 2.0]}, "optimiser": {"length": 50}});
+        assert_eq!(first_difference(&a, &a.clone(), String::new()), None);
+
+        let mut b = a.clone();
+        b["gp"]["floor"][1] = json!(3.0);
+        b["optimiser"]["length"] = json!(5);
+        let d = first_difference(&a, &b, String::new()).unwrap();
+        assert_eq!(d.key, "gp.floor[1]", "sorted keys: gp before optimiser");
+        assert_eq!(
+            d.to_string(),
+            "`gp.floor[1]` differs (recorded 2.0, now 3.0)"
+        );
+        assert_eq!(d.quick_hint("resumes"), "");
+
+        b["gp"] = a["gp"].clone();
+        let d = first_difference(&a, &b, String::new()).unwrap();
+        assert_eq!(
+            d.quick_hint("resumes"),
+            "; a --quick run resumes with --quick"
+        );
+
+        let d = first_difference(&json!({}), &json!({"sensor_noise": false}), String::new());
+        assert_eq!(
+            d.unwrap().to_string(),
+            "`sensor_noise` differs (recorded absent, now false)"
+        );
+        let long = json!("x".repeat(100));
+        let d = first_difference(&long, &json!(1), String::new()).unwrap();
+        assert_eq!(d.key, "(root)");
+        assert!(d.recorded.ends_with('…') && d.recorded.chars().count() == 61);
     }
 }
