@@ -111,9 +111,19 @@ pub fn rollout(
     seed: u64,
     mut act: impl FnMut(usize, &[f64]) -> Result<Vec<f64>, LearnError>,
 ) -> Result<Rollout, LearnError> {
+    // A NaN from the system would travel silently into the recorded return, the model
+    // selection's scores and the summary; it is the system's error, named where it happened.
+    let finite = |at: &str, what: &str, v: &[f64]| match v.iter().position(|x| !x.is_finite()) {
+        Some(i) => Err(LearnError::Env(format!(
+            "{at}: the {what} has a non-finite entry {i} ({})",
+            v[i]
+        ))),
+        None => Ok(()),
+    };
     let first = env
         .reset(start, seed)
         .map_err(|e| LearnError::Env(e.to_string()))?;
+    finite("reset", "observation", &first)?;
     let mut r = Rollout {
         observations: vec![first],
         actions: Vec::new(),
@@ -126,6 +136,9 @@ pub fn rollout(
         let step = env
             .step(&a)
             .map_err(|e| LearnError::Env(format!("step {t}: {e}")))?;
+        let at = format!("step {t}");
+        finite(&at, "observation", &step.observation)?;
+        finite(&at, "true state", &step.info.true_state)?;
         r.actions.push(a);
         r.observations.push(step.observation);
         r.true_states.push(step.info.true_state.clone());

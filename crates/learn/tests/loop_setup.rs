@@ -197,3 +197,47 @@ fn each_update_evaluates_its_start_point_once() {
         assert_eq!(count.passes[episode], *evaluations, "update {episode}");
     }
 }
+
+/// A system that returns a NaN is stopped there with an error naming the step and entry, not
+/// carried into the recorded return and the summary.
+#[test]
+fn a_non_finite_state_from_the_system_is_an_error_naming_the_step() {
+    struct NanAtStep3(Integrator);
+    impl Environment for NanAtStep3 {
+        fn state_dim(&self) -> usize {
+            self.0.state_dim()
+        }
+        fn action_dim(&self) -> usize {
+            self.0.action_dim()
+        }
+        fn dt(&self) -> f64 {
+            self.0.dt()
+        }
+        fn horizon(&self) -> usize {
+            self.0.horizon()
+        }
+        fn state_names(&self) -> Vec<String> {
+            self.0.state_names()
+        }
+        fn action_names(&self) -> Vec<String> {
+            self.0.action_names()
+        }
+        fn reset(&mut self, start: &[f64], seed: u64) -> Result<Vec<f64>, EnvError> {
+            self.0.reset(start, seed)
+        }
+        fn step(&mut self, action: &[f64]) -> Result<Step, EnvError> {
+            let mut s = self.0.step(action)?;
+            if self.0.t == 3 {
+                s.info.true_state[0] = f64::NAN;
+            }
+            Ok(s)
+        }
+    }
+    let mut env = NanAtStep3(Integrator::default());
+    let err = setup(1, 1).run(&mut env, &mut ()).err().expect("refused");
+    assert!(
+        matches!(&err, LearnError::Env(msg)
+            if msg == "step 2: the true state has a non-finite entry 0 (NaN)"),
+        "{err}"
+    );
+}
