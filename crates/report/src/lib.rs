@@ -38,7 +38,9 @@ mod synthetic;
 #[cfg(test)]
 mod tests;
 
-pub use acceptance::{acceptance_markdown, FINAL_BELOW_INITIAL, SIC_MEAN_K_Y_ABOVE_GIC};
+pub use acceptance::{
+    acceptance_markdown, FINAL_BELOW_INITIAL, SAME_SEED_BUNDLES, SIC_MEAN_K_Y_ABOVE_GIC,
+};
 pub use error::ReportError;
 use std::path::{Path, PathBuf};
 

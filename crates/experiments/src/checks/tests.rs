@@ -263,3 +263,31 @@ fn every_claim_has_a_unique_id_and_a_seed_rule() {
         }
     }
 }
+
+/// The acceptance table's same-seed bundles name claims by id: each bundle's ids are claims one
+/// shipped experiment makes, all with the same seed rule, so a renamed claim cannot drop a
+/// bundle's row unnoticed.
+#[test]
+fn every_same_seed_bundle_names_claims_one_experiment_makes() {
+    let made: Vec<Vec<ThesisCheck>> = crate::config::CONFIGS
+        .iter()
+        .map(|(name, _)| {
+            let c = cfg(name);
+            thesis_checks(name, &c, c.episodes, &summary(&[(60.0, true); 25]))
+        })
+        .collect();
+    for (label, ids) in vicpilco_report::SAME_SEED_BUNDLES {
+        let owner = made
+            .iter()
+            .find(|checks| ids.iter().all(|id| checks.iter().any(|c| c.id == *id)))
+            .unwrap_or_else(|| panic!("no experiment makes every claim of `{label}`: {ids:?}"));
+        let rules: Vec<_> = ids
+            .iter()
+            .map(|id| owner.iter().find(|c| c.id == *id).unwrap().across_seeds)
+            .collect();
+        assert!(
+            rules[0].is_some() && rules.iter().all(|r| *r == rules[0]),
+            "{label}: {rules:?}"
+        );
+    }
+}

@@ -318,3 +318,76 @@ fn runs_pooled_under_one_name_with_other_settings_are_pointed_out() {
         "{md}"
     );
 }
+
+/// Parts of one bullet that pass on different seeds do not make the bullet pass: its row counts
+/// a seed only when every part holds there.
+#[test]
+fn a_bullets_parts_must_hold_on_the_same_seed() {
+    let tmp = TempDir::new("acceptance-bundle");
+    let part = |id: &str, pass: Option<bool>| claim(id, id, "x", pass, false);
+    // Seeds 1-3 pass the first insertion, seeds 3-5 the final return, seeds 1-5 the three in a
+    // row: each part passes on 3 of 5 seeds, the bullet on seed 3 only.
+    let dirs: Vec<PathBuf> = (1..=5)
+        .map(|seed: u64| {
+            let claims = vec![
+                part("vilta_first_insertion", Some(seed <= 3)),
+                part("vilta_three_after_first", Some(true)),
+                part("vilta_final_return", Some(seed >= 3)),
+            ];
+            write_summary(tmp.path(), &format!("s{seed}"), "vilta", seed, 1.0, claims)
+        })
+        .collect();
+    let md = acceptance_markdown(&dirs).unwrap();
+    assert_eq!(
+        row_of(&md, "vilta_first_insertion")[7..],
+        ["3 of 5", "pass"]
+    );
+    assert_eq!(row_of(&md, "vilta_final_return")[7..], ["3 of 5", "pass"]);
+    let bundle = row_of(&md, SAME_SEED_BUNDLES[2].0);
+    assert_eq!(
+        bundle[2..7],
+        [
+            "2 of 3 parts (fail)",
+            "2 of 3 parts (fail)",
+            "3 of 3 parts (pass)",
+            "2 of 3 parts (fail)",
+            "2 of 3 parts (fail)"
+        ]
+    );
+    assert_eq!(bundle[7..], ["1 of 5", "fail"]);
+    // An undecided part leaves a seed undecided, unless another part already failed there.
+    let undecided = [
+        write_summary(
+            tmp.path(),
+            "u1",
+            "vilta",
+            1,
+            1.0,
+            vec![
+                part("vilta_first_insertion", Some(true)),
+                part("vilta_three_after_first", None),
+                part("vilta_final_return", Some(true)),
+            ],
+        ),
+        write_summary(
+            tmp.path(),
+            "u2",
+            "vilta",
+            2,
+            1.0,
+            vec![
+                part("vilta_first_insertion", Some(false)),
+                part("vilta_three_after_first", None),
+                part("vilta_final_return", Some(true)),
+            ],
+        ),
+    ];
+    let md = acceptance_markdown(&undecided).unwrap();
+    let bundle = row_of(&md, SAME_SEED_BUNDLES[2].0);
+    assert_eq!(
+        bundle[2..4],
+        ["2 of 3 parts (undecided)", "1 of 3 parts (fail)"]
+    );
+    // Without all its parts among the claims, no bundle row.
+    assert!(!md.contains(SAME_SEED_BUNDLES[0].0));
+}
