@@ -113,17 +113,15 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ExperimentError + '_ {
     }
 }
 
-/// Creates the run directory of a fresh or replaying run; a fresh run first refuses one that
-/// holds a run, before anything is written (`--replay-from` checks in
-/// [`crate::replay::graft`]). A resumed run's directory must exist already.
+/// Creates the run directory of a fresh run, first refusing one that holds a run, before
+/// anything is written. A resumed run's directory must exist already (its checkpoint says
+/// whether there is anything to resume), and [`crate::replay::graft`] makes a replaying run's
+/// once its source checks out, so a refused run leaves no folder behind.
 pub(crate) fn prepare_out(opts: &RunOptions) -> Result<(), ExperimentError> {
-    if opts.resume {
-        // Its checkpoint says whether there is anything to resume; no folder is made for it.
+    if opts.resume || opts.replay_from.is_some() {
         return Ok(());
     }
-    if opts.replay_from.is_none() {
-        refuse_recorded_run(&opts.out)?;
-    }
+    refuse_recorded_run(&opts.out)?;
     std::fs::create_dir_all(&opts.out).map_err(|e| ExperimentError::Io {
         path: opts.out.clone(),
         source: e,

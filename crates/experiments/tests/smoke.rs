@@ -141,6 +141,24 @@ fn a_directory_with_any_record_file_is_not_started_over() {
         err.contains("already holds a run (rollouts.jsonl)"),
         "{err}"
     );
+    // A replay of a run that is not there, or a resume of a directory that is not there, is
+    // refused without leaving a folder behind.
+    let nowhere = dir.join("nowhere");
+    for opts in [
+        RunOptions {
+            out: nowhere.clone(),
+            ..replay.clone()
+        },
+        RunOptions {
+            out: nowhere.clone(),
+            replay_from: None,
+            resume: true,
+            ..replay
+        },
+    ] {
+        assert!(run("vil-gic", &opts, &mut ()).is_err());
+        assert!(!nowhere.exists(), "{} was made", nowhere.display());
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
