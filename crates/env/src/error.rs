@@ -103,12 +103,27 @@ impl EnvError {
     }
 }
 
+/// A number in an error message: as Rust prints it for everyday magnitudes, in exponent form
+/// outside them (plain `{}` spells 1e-300 with 300 digits).
+pub(crate) struct Num(pub f64);
+
+impl std::fmt::Display for Num {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0;
+        if v.is_finite() && v != 0.0 && !(1e-6..1e15).contains(&v.abs()) {
+            write!(f, "{v:e}")
+        } else {
+            write!(f, "{v}")
+        }
+    }
+}
+
 /// `v` as a config value for `field`: finite.
 pub(crate) fn finite(field: &str, v: f64) -> Result<(), EnvError> {
     if v.is_finite() {
         Ok(())
     } else {
-        Err(EnvError::config(field, v, "finite"))
+        Err(EnvError::config(field, Num(v), "finite"))
     }
 }
 
@@ -117,7 +132,7 @@ pub(crate) fn positive(field: &str, v: f64) -> Result<(), EnvError> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
-        Err(EnvError::config(field, v, "> 0"))
+        Err(EnvError::config(field, Num(v), "> 0"))
     }
 }
 
@@ -126,6 +141,28 @@ pub(crate) fn non_negative(field: &str, v: f64) -> Result<(), EnvError> {
     if v.is_finite() && v >= 0.0 {
         Ok(())
     } else {
-        Err(EnvError::config(field, v, "≥ 0"))
+        Err(EnvError::config(field, Num(v), "≥ 0"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_in_messages_stay_short() {
+        for (v, shown) in [
+            (0.1, "0.1"),
+            (1000.0, "1000"),
+            (-5.0, "-5"),
+            (0.0, "0"),
+            (1e-300, "1e-300"),
+            (2.5e20, "2.5e20"),
+            (f64::NAN, "NaN"),
+        ] {
+            assert_eq!(Num(v).to_string(), shown);
+        }
+        let err = positive("control_hz", -1e-300).unwrap_err().to_string();
+        assert_eq!(err, "config control_hz = -1e-300 must be > 0");
     }
 }

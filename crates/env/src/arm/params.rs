@@ -4,7 +4,7 @@
 //! (issue 5 fixes them) and are listed in `crates/env/README.md`.
 
 use super::plan::ReferenceSpec;
-use crate::error::{finite, non_negative, positive};
+use crate::error::{finite, non_negative, positive, Num};
 use crate::EnvError;
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -491,8 +491,8 @@ impl ArmConfig {
         if self.h > 1.0 / self.control_hz {
             return Err(EnvError::config(
                 "h",
-                self.h,
-                format!("≤ 1/control_hz = {}", 1.0 / self.control_hz),
+                Num(self.h),
+                format!("≤ 1/control_hz = {}", Num(1.0 / self.control_hz)),
             ));
         }
         positive("step_dt", self.step_dt)?;
@@ -500,10 +500,10 @@ impl ArmConfig {
         if ticks.round() < 1.0 || (ticks - ticks.round()).abs() > 1e-9 * ticks {
             return Err(EnvError::config(
                 "step_dt",
-                self.step_dt,
+                Num(self.step_dt),
                 format!(
                     "a whole number of control periods (1/{} s)",
-                    self.control_hz
+                    Num(self.control_hz)
                 ),
             ));
         }
