@@ -135,6 +135,16 @@ pub enum ExperimentError {
         /// The first of the run's files found there, e.g. `checkpoint.json`.
         file: &'static str,
     },
+    /// Another process is running in the directory (it holds [`record::LOCK_FILE`]'s lock).
+    #[error(
+        "{} is in use by another vicpilco process (a run still going there): wait for it to \
+         end or stop it, then --resume",
+        dir.display()
+    )]
+    RunBusy {
+        /// The run directory.
+        dir: PathBuf,
+    },
     /// [`own::run_own`] was given options or a name that belong to the named experiments, or
     /// a seed other than its setup's.
     #[error("run of a system of your own: {0}")]
@@ -286,7 +296,7 @@ pub fn run(
             what: "--replay-from",
         });
     }
-    prepare_out(opts)?;
+    let _lock = prepare_out(opts)?;
     subnormals::run_flushed(|| match (cfg, name) {
         (Some(cfg), _) => run_arm(name, cfg, opts, observer),
         (None, "pendulum") => run_classic(name, PendulumScenario::default(), opts, observer),

@@ -62,7 +62,7 @@ where
             opts.seed, setup.seed
         ));
     }
-    prepare_out(opts)?;
+    let _lock = prepare_out(opts)?;
     setup.episodes = opts.episodes.unwrap_or(setup.episodes);
     let meta = RunMeta {
         config: settings.clone(),

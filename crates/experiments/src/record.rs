@@ -116,16 +116,41 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> ExperimentError + '_ {
 /// Creates the run directory of a fresh run, first refusing one that holds a run, before
 /// anything is written. A resumed run's directory must exist already (its checkpoint says
 /// whether there is anything to resume), and [`crate::replay::graft`] makes a replaying run's
-/// once its source checks out, so a refused run leaves no folder behind.
-pub(crate) fn prepare_out(opts: &RunOptions) -> Result<(), ExperimentError> {
-    if opts.resume || opts.replay_from.is_some() {
-        return Ok(());
+/// once its source checks out, so a refused run leaves no folder behind. Returns the
+/// directory's lock ([`lock_run_dir`]) whenever the directory exists, to be held for the run.
+pub(crate) fn prepare_out(opts: &RunOptions) -> Result<Option<std::fs::File>, ExperimentError> {
+    if !opts.resume && opts.replay_from.is_none() {
+        refuse_recorded_run(&opts.out)?;
+        std::fs::create_dir_all(&opts.out).map_err(io_err(&opts.out))?;
     }
-    refuse_recorded_run(&opts.out)?;
-    std::fs::create_dir_all(&opts.out).map_err(|e| ExperimentError::Io {
-        path: opts.out.clone(),
-        source: e,
-    })
+    if opts.out.is_dir() {
+        lock_run_dir(&opts.out).map(Some)
+    } else {
+        Ok(None)
+    }
+}
+
+/// The file in a run directory whose lock marks it in use.
+pub const LOCK_FILE: &str = ".vicpilco.lock";
+
+/// Locks `dir` for this process (an advisory lock on [`LOCK_FILE`], released when the file is
+/// dropped or the process ends, however it ends): a `--resume` started while the run is still
+/// going would otherwise truncate the records the running process appends to.
+pub(crate) fn lock_run_dir(dir: &Path) -> Result<std::fs::File, ExperimentError> {
+    let path = dir.join(LOCK_FILE);
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&path)
+        .map_err(io_err(&path))?;
+    match file.try_lock() {
+        Ok(()) => Ok(file),
+        Err(std::fs::TryLockError::WouldBlock) => Err(ExperimentError::RunBusy {
+            dir: dir.to_path_buf(),
+        }),
+        Err(std::fs::TryLockError::Error(e)) => Err(io_err(&path)(e)),
+    }
 }
 
 /// The JSON-lines files a run directory keeps per update.

@@ -91,9 +91,31 @@ fn pendulum_two_updates_write_a_reproducible_summary() {
     assert!(err.to_string().contains("--resume"), "{err}");
     assert_eq!(std::fs::read(a.join("rollouts.jsonl")).unwrap(), recorded);
 
+    // While another process runs in the directory (holding its lock), a resume is refused
+    // before it touches a file.
+    let summary_before = std::fs::read(a.join("summary.json")).unwrap();
+    let holder = std::fs::OpenOptions::new()
+        .write(true)
+        .open(a.join(vicpilco_experiments::record::LOCK_FILE))
+        .expect("a run leaves its lock file");
+    holder.lock().unwrap();
+    let busy = RunOptions {
+        seed: 7,
+        out: a.clone(),
+        episodes: Some(3),
+        resume: true,
+        ..Default::default()
+    };
+    let err = run("pendulum", &busy, &mut ()).unwrap_err();
+    assert!(matches!(err, ExperimentError::RunBusy { .. }), "{err}");
+    assert_eq!(
+        std::fs::read(a.join("summary.json")).unwrap(),
+        summary_before
+    );
+    drop(holder);
+
     // A resume asking for fewer updates than the run has cannot undo them: refused, and the
     // record (sessions and wall time included) is left as it was.
-    let summary_before = std::fs::read(a.join("summary.json")).unwrap();
     let fewer = RunOptions {
         seed: 7,
         out: a.clone(),
