@@ -85,7 +85,11 @@ impl GaussExp {
         let inversions: usize = (0..n)
             .map(|a| (a + 1..n).filter(|&b| perm[a] > perm[b]).count())
             .sum();
-        let sign = if inversions.is_multiple_of(2) { 1.0 } else { -1.0 };
+        let sign = if inversions.is_multiple_of(2) {
+            1.0
+        } else {
+            -1.0
+        };
         let det: f64 = sign * (0..n).map(|a| lu.U()[(a, a)]).product::<f64>();
         let gcol = MatRef::from_column_major_slice(&g, n, 1);
         let tcol = lu.solve_transpose(gcol);
