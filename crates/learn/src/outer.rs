@@ -461,7 +461,7 @@ where
             episodes: Vec::new(),
         };
         observer.checkpoint(&state);
-        let mut outcome = self.resume(env, observer, state)?;
+        let mut outcome = self.resume_checked(env, observer, state)?;
         outcome.initial = initial;
         Ok(outcome)
     }
@@ -470,12 +470,23 @@ where
     /// up to `self.episodes` updates. Given the same set-up, the updates it runs are bit for
     /// bit those of an uninterrupted run.
     pub fn resume(
-        mut self,
+        self,
         env: &mut dyn Environment,
         observer: &mut dyn LoopObserver,
         state: LoopState,
     ) -> Result<LoopOutcome<P>, LearnError> {
         self.check_against(env)?;
+        self.resume_checked(env, observer, state)
+    }
+
+    /// [`Self::resume`] once [`Self::check_against`] has passed (`run` checks before its
+    /// initial roll-outs, so its updates need not check again).
+    fn resume_checked(
+        mut self,
+        env: &mut dyn Environment,
+        observer: &mut dyn LoopObserver,
+        state: LoopState,
+    ) -> Result<LoopOutcome<P>, LearnError> {
         let trig = self.trig();
         self.policy.set_params(&state.policy_params)?;
         let LoopState {
