@@ -5,6 +5,12 @@
 //! training, policy optimisation and roll-outs know nothing of them. Randomness is derived
 //! from the master seed per (episode, purpose), so an episode can be reproduced alone.
 
+mod check;
+mod rollout;
+
+pub use rollout::{derive_seed, rollout};
+use rollout::{PURPOSE_EXPLORE, PURPOSE_EXTRA_ROLLOUT, PURPOSE_NOISE, PURPOSE_START};
+
 use crate::data::{augment, training_set, Rollout};
 use crate::record::{EpisodeRecord, LoopObserver, LoopOutcome, LoopState, Phase};
 use crate::selection::ModelSelection;
@@ -87,76 +93,6 @@ pub struct LoopSetup<P> {
     pub seed: u64,
 }
 
-/// SplitMix64 of (master seed, episode, purpose): independent streams without stored state.
-pub fn derive_seed(master: u64, episode: u64, purpose: u64) -> u64 {
-    let mut z = master
-        ^ episode.wrapping_mul(0x9E37_79B9_7F4A_7C15)
-        ^ purpose.wrapping_mul(0xD1B5_4A32_D192_ED03);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
-const PURPOSE_START: u64 = 1;
-const PURPOSE_NOISE: u64 = 2;
-const PURPOSE_EXPLORE: u64 = 3;
-/// Roll-out j ≥ 1 of an update uses purpose `PURPOSE_EXTRA_ROLLOUT + j` for its sub-seed.
-const PURPOSE_EXTRA_ROLLOUT: u64 = 100;
-
-/// Run one episode on the system with `act(t, observation) → action`, until the horizon or
-/// until the system ends it (logged as a warning with the system's reason).
-pub fn rollout(
-    env: &mut dyn Environment,
-    start: &[f64],
-    seed: u64,
-    mut act: impl FnMut(usize, &[f64]) -> Result<Vec<f64>, LearnError>,
-) -> Result<Rollout, LearnError> {
-    // A NaN from the system would travel silently into the recorded return, the model
-    // selection's scores and the summary; it is the system's error, named where it happened.
-    let finite = |at: &str, what: &str, v: &[f64]| match v.iter().position(|x| !x.is_finite()) {
-        Some(i) => Err(LearnError::Env(format!(
-            "{at}: the {what} has a non-finite entry {i} ({})",
-            v[i]
-        ))),
-        None => Ok(()),
-    };
-    let first = env
-        .reset(start, seed)
-        .map_err(|e| LearnError::Env(e.to_string()))?;
-    finite("reset", "observation", &first)?;
-    let mut r = Rollout {
-        observations: vec![first],
-        actions: Vec::new(),
-        true_states: vec![start.to_vec()],
-        infos: Vec::new(),
-        used_for_training: true,
-    };
-    for t in 0..env.horizon() {
-        let a = act(t, r.observations.last().expect("non-empty"))?;
-        let step = env
-            .step(&a)
-            .map_err(|e| LearnError::Env(format!("step {t}: {e}")))?;
-        let at = format!("step {t}");
-        finite(&at, "observation", &step.observation)?;
-        finite(&at, "true state", &step.info.true_state)?;
-        r.actions.push(a);
-        r.observations.push(step.observation);
-        r.true_states.push(step.info.true_state.clone());
-        r.infos.push(step.info);
-        if step.done {
-            break;
-        }
-    }
-    if let Some(why) = r.infos.last().and_then(|i| i.stopped_early.as_deref()) {
-        tracing::warn!(
-            steps = r.len(),
-            horizon = env.horizon(),
-            "the system ended the roll-out early; the steps it did not run pay its last cost: {why}"
-        );
-    }
-    Ok(r)
-}
-
 impl<P: Policy + Clone + Sync> LoopSetup<P>
 where
     P::Cache: Send,
@@ -170,113 +106,6 @@ where
             )
             .expect("validated")
         })
-    }
-
-    /// Checks, before anything runs on the system, that the set-up's parts fit each other and
-    /// `env`: the step layout against the policy and squashing, the state, action and horizon
-    /// against the system's, the prior shift (H rows of D0 finite numbers), the prediction
-    /// starts (D0 means, D0×D0 covariances) and the return's costs (their input widths).
-    /// Without it a mismatch would surface as a panic deep in a prediction, or after a roll-out
-    /// had already moved a real robot. Fails with [`LearnError::Spec`] naming the field.
-    pub fn check_against(&self, env: &dyn Environment) -> Result<(), LearnError> {
-        let bad = |what: &str, detail: String| Err(LearnError::Spec(format!("{what}: {detail}")));
-        let d0 = self.spec.state_dim;
-        let actions = self.policy.n_outputs();
-        if let Some(sq) = &self.squash {
-            if sq.n_inputs() != actions {
-                return bad(
-                    "squash",
-                    format!(
-                        "{} inputs for a policy with {actions} outputs",
-                        sq.n_inputs()
-                    ),
-                );
-            }
-        }
-        self.spec.validate(
-            self.policy.n_inputs(),
-            actions,
-            self.spec.dyn_inputs.len() + actions,
-            d0,
-        )?;
-        if env.state_dim() != d0 || env.action_dim() != actions {
-            return bad(
-                "spec.state_dim",
-                format!(
-                    "{d0} states and {actions} actions, but the system has {} and {}",
-                    env.state_dim(),
-                    env.action_dim()
-                ),
-            );
-        }
-        let h = self.ret.horizon;
-        if env.horizon() != h {
-            return bad(
-                "ret.horizon",
-                format!(
-                    "{h} steps, but the system's episodes have {}",
-                    env.horizon()
-                ),
-            );
-        }
-        if let Some(shift) = &self.prior_shift {
-            if shift.len() != h {
-                return bad(
-                    "prior_shift",
-                    format!("{} rows for a horizon of {h} (one per step)", shift.len()),
-                );
-            }
-            crate::step::check_prior_rows(shift, d0)?;
-        }
-        if self.prediction_starts.is_empty() {
-            return bad("prediction_starts", "none given (at least one)".into());
-        }
-        for (k, (m, cov)) in self.prediction_starts.iter().enumerate() {
-            if m.len() != d0 || cov.nrows() != d0 || cov.ncols() != d0 {
-                return bad(
-                    "prediction_starts",
-                    format!(
-                        "start {k} has a mean of {} and a {}×{} covariance for {d0} states",
-                        m.len(),
-                        cov.nrows(),
-                        cov.ncols()
-                    ),
-                );
-            }
-        }
-        if let Some(&i) = self.ret.cost_angles.iter().find(|&&i| i >= d0) {
-            return bad(
-                "ret.cost_angles",
-                format!("index {i} ≥ state dimension {d0}"),
-            );
-        }
-        let cost_width = d0 + 2 * self.ret.cost_angles.len();
-        if let Some(c) = self
-            .ret
-            .state_cost
-            .as_ref()
-            .filter(|c| c.n_inputs() != cost_width)
-        {
-            return bad(
-                "ret.state_cost",
-                format!(
-                    "{} inputs, but the state with its cost angles has {cost_width}",
-                    c.n_inputs()
-                ),
-            );
-        }
-        if let Some((e, _)) = self
-            .ret
-            .energy
-            .as_ref()
-            .filter(|(e, _)| e.n_inputs() != actions)
-        {
-            return bad(
-                "ret.energy",
-                format!("{} inputs for {actions} actions", e.n_inputs()),
-            );
-        }
-        Ok(())
     }
 
     /// `policy`'s predicted return (and, with `with_grad`, its gradient) under `model`: the
