@@ -198,6 +198,28 @@ fn out_of_range_values_are_errors_naming_the_key() {
             "cost.position_target",
         ),
         ("w_energy = 0.01", "w_energy = -0.01", "cost.w_energy"),
+        // Sizes that would make the run allocate without bound or never end.
+        (
+            "horizon = 100",
+            "horizon = 1000000000",
+            "`horizon` must be ≤",
+        ),
+        (
+            "n_basis = 10",
+            "n_basis = 100000000",
+            "`policy.n_basis` must be ≤",
+        ),
+        (
+            "memory = 10",
+            "memory = 1000000000000",
+            "`optimiser.memory` must be ≤",
+        ),
+        // The simulator's rule, named by this file's key (the simulator calls it step_dt).
+        (
+            "dt = 0.1",
+            "dt = 0.0123",
+            "`dt` must be a whole number of control periods",
+        ),
     ] {
         assert!(text.contains(from), "{from}");
         let e = error_of(&text.replace(from, to));

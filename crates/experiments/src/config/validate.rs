@@ -3,6 +3,19 @@
 
 use super::{ArmExperiment, ConfigError, PolicyKind, PriorMean, Task};
 use vicpilco_env::arm::ControllerKind;
+use vicpilco_env::EnvError;
+
+/// Most prediction steps a config may ask for (`horizon`): 1000 s at the thesis's 0.1 s step.
+/// The policy gradient keeps every step's moment-matching cache for its reverse sweep, so
+/// memory grows with the horizon; a mistyped horizon is refused here rather than found by the
+/// allocator (or, for a very long one, never).
+pub const MAX_HORIZON: usize = 10_000;
+/// Most RBF basis functions (`policy.n_basis`): the policy's moment matching forms N_c × N_c
+/// matrices (32 MB at 2000), where the thesis uses at most 75.
+pub const MAX_N_BASIS: usize = 2_000;
+/// Most L-BFGS correction pairs (`optimiser.memory`); each holds two vectors of all policy
+/// parameters, and beyond a few dozen pairs L-BFGS gains nothing.
+pub const MAX_LBFGS_MEMORY: usize = 1_000;
 
 struct Check<'a> {
     file: &'a str,
@@ -35,6 +48,13 @@ impl Check<'_> {
             Ok(())
         } else {
             Err(self.fail(key, format!("must be ≥ {min}, got {v}")))
+        }
+    }
+    fn at_most(&self, key: &str, v: usize, max: usize) -> Result<(), ConfigError> {
+        if v <= max {
+            Ok(())
+        } else {
+            Err(self.fail(key, format!("must be ≤ {max}, got {v}")))
         }
     }
     fn require<T>(&self, key: &str, v: &Option<T>, why: &str) -> Result<(), ConfigError> {
@@ -117,6 +137,7 @@ impl ArmExperiment {
         }
         c.at_least("episodes", self.episodes, 1)?;
         c.at_least("horizon", self.horizon, 1)?;
+        c.at_most("horizon", self.horizon, MAX_HORIZON)?;
         c.positive("dt", self.dt)?;
         let p = &self.policy;
         c.positive("policy.k_min", p.k_min)?;
@@ -132,6 +153,7 @@ impl ArmExperiment {
             PolicyKind::Rbf => {
                 c.require("policy.n_basis", &p.n_basis, "for an RBF policy")?;
                 c.at_least("policy.n_basis", p.n_basis.unwrap_or(0), 1)?;
+                c.at_most("policy.n_basis", p.n_basis.unwrap_or(0), MAX_N_BASIS)?;
                 c.require("policy.lengthscales", &p.lengthscales, "for an RBF policy")?;
                 for (i, &l) in p.lengthscales.iter().flatten().enumerate() {
                     c.positive(&format!("policy.lengthscales[{i}]"), l)?;
@@ -201,6 +223,7 @@ impl ArmExperiment {
         c.at_least("optimiser.length", o.length as usize, 1)?;
         c.at_least("optimiser.mfepls", o.mfepls as usize, 1)?;
         c.at_least("optimiser.memory", o.memory, 1)?;
+        c.at_most("optimiser.memory", o.memory, MAX_LBFGS_MEMORY)?;
         if !o.scale_params || p.kind != PolicyKind::Rbf {
             c.forbid(
                 "optimiser.centre_scale",
@@ -355,6 +378,30 @@ impl ArmExperiment {
                 }
             }
         }
-        Ok(())
+        self.check_simulator(&c)
+    }
+
+    /// The simulator's own rules on what this config sets (the step a whole number of control
+    /// periods, …), named by this file's keys.
+    fn check_simulator(&self, c: &Check<'_>) -> Result<(), ConfigError> {
+        match crate::arm::arm_config(self).validate() {
+            Ok(()) => Ok(()),
+            Err(EnvError::InvalidConfig {
+                field,
+                value,
+                requirement,
+            }) => {
+                let key = match field.as_str() {
+                    "step_dt" => "dt".to_string(),
+                    "horizon" => "horizon".to_string(),
+                    "mode.delta_max" => "policy.delta_max".to_string(),
+                    "mode.delta_tick" => "vilta.delta_tick".to_string(),
+                    "mode.max_lead" => "vilta.max_lead".to_string(),
+                    other => format!("(simulator) {other}"),
+                };
+                Err(c.fail(&key, format!("must be {requirement}, got {value}")))
+            }
+            Err(e) => Err(c.fail("(simulator)", e.to_string())),
+        }
     }
 }
