@@ -304,8 +304,44 @@ pub(crate) struct Prediction {
     /// The range of each squashed action (absent in runs without squashing and in files
     /// written before it was recorded).
     pub action_bounds: Option<Vec<(f64, f64)>>,
-    /// The first start distribution's steps.
-    pub steps: Vec<PredStep>,
+    /// Each start distribution's steps (a run optimising over K start distributions, as
+    /// `vilta-var` does, records K predictions; every one has at least one step).
+    pub starts: Vec<Vec<PredStep>>,
+}
+
+impl Prediction {
+    /// Start distribution `k`'s steps.
+    pub fn steps(&self, k: usize) -> &[PredStep] {
+        &self.starts[k]
+    }
+
+    /// The start distribution to compare with roll-out `r`: the one whose first predicted
+    /// state gives `r`'s first recorded state the highest likelihood (per-dimension Gaussian).
+    /// A roll-out from a random start (`vilta-var`) is then shown beside the prediction from
+    /// the start nearest its own, not beside whichever start happens to be first.
+    pub fn start_nearest(&self, r: Option<&Rollout>) -> usize {
+        let Some(x1) = r.and_then(|r| r.true_states.get(1)) else {
+            return 0;
+        };
+        let misfit = |steps: &[PredStep]| -> f64 {
+            let s = &steps[0];
+            let terms = s.mean.iter().zip(&s.var).zip(x1);
+            terms
+                .map(|((m, v), x)| (x - m).powi(2) / v.max(1e-300) + v.max(1e-300).ln())
+                .sum()
+        };
+        let scores = self.starts.iter().map(|s| misfit(s));
+        let best = scores.enumerate().min_by(|a, b| a.1.total_cmp(&b.1));
+        best.map_or(0, |(k, _)| k)
+    }
+
+    /// ", start k of K" for a prediction over several start distributions, else "".
+    pub fn start_label(&self, k: usize) -> String {
+        match self.starts.len() {
+            1 => String::new(),
+            n => format!(", start {} of {n}", k + 1),
+        }
+    }
 }
 
 pub(crate) struct FinalEval {
@@ -392,5 +428,55 @@ impl Run {
             .and_then(|p| p.first())
             .map(|p| p.dt)
             .or(self.summary.config_dt)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn step(mean: &[f64], var: &[f64]) -> PredStep {
+        PredStep {
+            t: 0.1,
+            mean: mean.to_vec(),
+            var: var.to_vec(),
+            action_mean: vec![],
+            action_var: vec![],
+            weighted_cost: None,
+        }
+    }
+
+    fn rollout(first_states: &[&[f64]]) -> Rollout {
+        Rollout {
+            episode: 1,
+            costs: None,
+            actions: vec![],
+            true_states: first_states.iter().map(|s| s.to_vec()).collect(),
+            stopped_early: None,
+            path: vec![],
+        }
+    }
+
+    #[test]
+    fn a_roll_out_is_compared_with_the_start_nearest_its_own() {
+        let pred = Prediction {
+            episode: 1,
+            dt: 0.1,
+            state_names: vec!["x".into(), "y".into()],
+            action_names: vec![],
+            action_bounds: None,
+            starts: [0.1, 0.2, 0.3]
+                .iter()
+                .map(|&y| vec![step(&[0.5, y], &[1e-4, 1e-4])])
+                .collect(),
+        };
+        let r = rollout(&[&[0.5, 0.27], &[0.5, 0.28]]);
+        assert_eq!(pred.start_nearest(Some(&r)), 2);
+        let r = rollout(&[&[0.5, 0.12], &[0.5, 0.13]]);
+        assert_eq!(pred.start_nearest(Some(&r)), 0);
+        // Without a recorded step to compare, the first.
+        assert_eq!(pred.start_nearest(Some(&rollout(&[&[0.5, 0.3]]))), 0);
+        assert_eq!(pred.start_nearest(None), 0);
+        assert_eq!(pred.start_label(2), ", start 3 of 3");
     }
 }

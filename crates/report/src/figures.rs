@@ -53,16 +53,45 @@ pub(crate) fn draw_all(
     if s.episodes.is_empty() {
         notes.push("summary.json lists no policy updates yet: no returns plot".into());
     } else {
-        let caption = "Predicted return (mean, 95 % interval) and recorded return of the first \
-                       roll-out per policy update. Green circle: every roll-out of that update \
-                       succeeds; yellow diamond: some do; red square: none do.";
+        let other_rollouts = other_rollout_returns(run);
+        let last = s.episodes.last().map(|e| e.index);
+        let final_policy = s.final_eval_update.filter(|&u| Some(u) != last);
+        let mut caption = "Predicted return (mean, 95 % interval) and recorded return of the \
+                           first roll-out per policy update. Green circle: every roll-out of \
+                           that update succeeds; yellow diamond: some do; red square: none do."
+            .to_string();
+        if !other_rollouts.is_empty() {
+            caption.push_str(
+                " Small circles: the returns of the update's further roll-outs (from other \
+                 starts; they test the policy and do not train the model).",
+            );
+        }
+        let starts = run
+            .predictions
+            .iter()
+            .flatten()
+            .map(|p| p.starts.len())
+            .max();
+        if let Some(k) = starts.filter(|&k| k > 1) {
+            caption.push_str(&format!(
+                " The policy is optimised over {k} start distributions; the predicted return \
+                 is the first's, as summary.json records it (predictions.jsonl holds all {k})."
+            ));
+        }
+        if let Some(u) = final_policy {
+            caption.push_str(&format!(
+                " Dashed line: update {u}, whose policy the run hands over (vilta.final_policy)."
+            ));
+        }
         out.add(
             &Returns {
                 episodes: &s.episodes,
                 initial_return: s.initial_return,
+                other_rollouts,
+                final_policy,
             },
             "returns",
-            caption.into(),
+            caption,
         )?;
         if s.initial_return.is_none() {
             notes.push("summary.json has no initial_return: no initial roll-out line".into());
@@ -81,16 +110,58 @@ pub(crate) fn draw_all(
                 "no prediction of update {u}, the final evaluation's: policy plot of the last update"
             ));
         }
-        policy(run, chosen.unwrap_or(last), &mut out, notes)?;
-        for (which, p) in [("first", first), ("last", last)] {
-            prediction(run, which, p, &mut out, notes)?;
-        }
+        let final_policy = chosen.unwrap_or(last);
+        policy(run, final_policy, &mut out, notes)?;
+        let why_final = if final_policy.episode == last.episode {
+            String::new()
+        } else {
+            format!(
+                ", the final evaluation's choice; the last update is {}",
+                last.episode
+            )
+        };
+        prediction(run, Which::First, first, &mut out, notes)?;
+        prediction(run, Which::Final(why_final), final_policy, &mut out, notes)?;
     } else if run.predictions.is_some() {
         notes.push("predictions.jsonl is empty: no policy or prediction plots".into());
     }
 
     arm(run, &mut out, notes)?;
     Ok(out.plots)
+}
+
+/// (update, recorded return) of every roll-out after the first of each policy update: the
+/// roll-outs summary.json does not describe. Roll-outs without recorded costs are left out.
+pub(crate) fn other_rollout_returns(run: &Run) -> Vec<(f64, f64)> {
+    let Some(rollouts) = &run.rollouts else {
+        return Vec::new();
+    };
+    let mut seen = std::collections::BTreeSet::new();
+    rollouts
+        .iter()
+        .filter(|r| r.episode > 0 && !seen.insert(r.episode))
+        .filter_map(|r| Some((r.episode as f64, r.costs.as_ref()?.iter().sum())))
+        .collect()
+}
+
+/// The optimised policy whose predictions (c, d) show.
+enum Which {
+    First,
+    /// The final policy, with why it is not the last update's (or "").
+    Final(String),
+}
+
+/// ", from the start distribution nearest the roll-out's start (k of K)" when a prediction
+/// has several start distributions, else "".
+fn start_words(p: &Prediction, start: usize) -> String {
+    match p.starts.len() {
+        1 => String::new(),
+        n => format!(
+            " It was optimised over {n} start distributions; shown is the prediction from \
+             start {} of {n}, the one nearest the recorded roll-out's start.",
+            start + 1
+        ),
+    }
 }
 
 fn policy(
@@ -100,6 +171,7 @@ fn policy(
     notes: &mut Vec<String>,
 ) -> Result<(), ReportError> {
     let final_rollout = run.rollout_of(shown.episode);
+    let start = shown.start_nearest(final_rollout);
     let initial = run.rollout_of(0);
     if run.rollouts.is_some() && final_rollout.is_none() {
         notes.push(format!(
@@ -113,6 +185,7 @@ fn policy(
     out.add(
         &Policy {
             pred: shown,
+            start,
             last: final_rollout,
             initial,
         },
@@ -120,45 +193,65 @@ fn policy(
         format!(
             "Final policy (update {}): predicted action distribution (mean ± 2σ{}) over time, \
              with the actions applied in that update's roll-out and in the initial exploration \
-             roll-out.",
+             roll-out.{}{}",
             shown.episode,
             if shown.action_bounds.is_some() {
                 ", clipped to the saturation range"
             } else {
                 ""
-            }
+            },
+            if shown.action_names.iter().any(|a| a.ends_with("_ref")) {
+                " Δx_ref and Δy_ref are the reference's increments per controller tick \
+                 (vilta.delta_tick in the settings), held over each step."
+            } else {
+                ""
+            },
+            start_words(shown, start)
         ),
     )
 }
 
 fn prediction(
     run: &Run,
-    which: &'static str,
+    which: Which,
     p: &Prediction,
     out: &mut Out,
     notes: &mut Vec<String>,
 ) -> Result<(), ReportError> {
     let rollout = run.rollout_of(p.episode);
+    let start = p.start_nearest(rollout);
+    let also = start_words(p, start);
     if run.rollouts.is_some() && rollout.is_none() {
         notes.push(format!(
             "no roll-out of update {} recorded: its predictions are plotted alone",
             p.episode
         ));
     }
-    let (state_stem, cost_stem) = match which {
-        "first" => ("prediction_first", "cost_first"),
-        _ => ("prediction_last", "cost_last"),
+    let (state_stem, cost_stem, which) = match which {
+        Which::First => (
+            "prediction_first",
+            "cost_first",
+            format!("first optimised policy (update {})", p.episode),
+        ),
+        Which::Final(why) => (
+            "prediction_last",
+            "cost_last",
+            format!("final policy (update {}{why})", p.episode),
+        ),
     };
     out.add(
-        &StatePrediction { pred: p, rollout },
+        &StatePrediction {
+            pred: p,
+            start,
+            rollout,
+        },
         state_stem,
         format!(
-            "Long-term prediction of the {which} optimised policy (update {}): each state \
-             dimension's predicted mean ± 2σ against the states recorded in its roll-out.",
-            p.episode
+            "Long-term prediction of the {which}: each state dimension's predicted mean ± 2σ \
+             against the states recorded in its roll-out.{also}"
         ),
     )?;
-    if p.steps.iter().any(|s| s.weighted_cost.is_none()) {
+    if p.steps(start).iter().any(|s| s.weighted_cost.is_none()) {
         notes.push(format!(
             "predictions.jsonl, update {}: no weighted_cost_mean/std per step: no {cost_stem} plot",
             p.episode
@@ -173,12 +266,15 @@ fn prediction(
         ));
     }
     out.add(
-        &CostPrediction { pred: p, recorded },
+        &CostPrediction {
+            pred: p,
+            start,
+            recorded,
+        },
         cost_stem,
         format!(
-            "Immediate cost of the {which} optimised policy (update {}): predicted mean ± 2σ \
-             against the cost recorded in its roll-out (same weighting).",
-            p.episode
+            "Immediate cost of the {which}: predicted mean ± 2σ against the cost recorded in \
+             its roll-out (same weighting).{also}"
         ),
     )
 }
@@ -250,7 +346,8 @@ fn final_eval(run: &Run, out: &mut Out, notes: &mut Vec<String>) -> Result<(), R
     );
     let caption = format!(
         "{policy} from fresh start positions: y(t) of each roll-out, {sampled}, green if \
-         it inserts, red if not."
+         it inserts, red if not; below (when the roll-outs recorded forces), the contact force \
+         magnitude |f| at each step's end, which shows how hard an inserting roll-out presses."
     );
     out.add(
         &FinalEvalPlot {

@@ -1,8 +1,10 @@
 //! report.html: one file with every image inlined as a data: URI, so it can be mailed or
 //! archived alone. Every string from the run files is escaped.
 
-use crate::data::{num, Colour, Run};
+use crate::acceptance::Verdict;
+use crate::data::{Colour, Run};
 use crate::figures::Plot;
+use crate::tables::{self, outcome_words, Cell, Table};
 use crate::ReportError;
 use base64::Engine;
 use serde_json::Value;
@@ -36,6 +38,10 @@ th, td { border: 1px solid #c8c8c8; padding: 3px 8px; text-align: left; vertical
 th { background: #e8eef5; }
 tbody tr:nth-child(even) { background: #f6f6f6; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+table.totals td { word-break: break-word; }
+div.wide { overflow-x: auto; }
+table.episodes { font-size: 13px; }
+table.episodes td { white-space: nowrap; }
 div.columns { display: flex; gap: 1.5em; align-items: flex-start; }
 div.columns table { flex: 1 1 0; }
 table.settings td { white-space: pre-wrap; word-break: break-word; font-size: 13px; }
@@ -192,98 +198,71 @@ fn settings(h: &mut String, config: Option<&Value>) {
     h.push_str("</div>\n");
 }
 
+fn html_cell(c: &Cell) -> String {
+    match c {
+        Cell::Num(t) => format!("<td class=\"num\">{}</td>", esc(t)),
+        Cell::Text(t) => format!("<td>{}</td>", esc(t)),
+        Cell::Outcome(colour) => format!(
+            "<td><span class=\"swatch {}\"></span>{}</td>",
+            colour.map_or("unknown", Colour::name),
+            outcome_words(*colour)
+        ),
+        Cell::Verdict(v) => {
+            let (class, word) = match v {
+                Verdict::Pass => ("pass", "PASS"),
+                Verdict::Fail => ("fail", "FAIL"),
+                Verdict::Undecided => ("na", v.name()),
+            };
+            format!("<td class=\"{class}\">{word}</td>")
+        }
+    }
+}
+
+/// A table in a box that scrolls sideways: an arm run's update table has up to 17 columns,
+/// wider than the page.
+fn table(h: &mut String, class: &str, t: &Table) {
+    let _ = write!(
+        h,
+        "<div class=\"wide\"><table class=\"{class}\">\n<thead><tr>"
+    );
+    for name in &t.header {
+        let _ = write!(h, "<th>{}</th>", esc(name));
+    }
+    h.push_str("</tr></thead>\n<tbody>\n");
+    for r in &t.rows {
+        h.push_str("<tr>");
+        for c in r {
+            h.push_str(&html_cell(c));
+        }
+        h.push_str("</tr>\n");
+    }
+    h.push_str("</tbody></table></div>\n");
+}
+
 fn episodes(h: &mut String, run: &Run) {
     h.push_str("<h2>Policy updates</h2>\n");
-    let eps = &run.summary.episodes;
-    if eps.is_empty() {
+    if run.summary.episodes.is_empty() {
         h.push_str("<p>No policy updates recorded yet.</p>\n");
         return;
     }
-    h.push_str(
-        "<table class=\"episodes\">\n<thead><tr><th>update</th><th>predicted return (mean ± 1σ)</th>\
-         <th>recorded return</th><th>outcome</th><th>success fraction</th><th>train [s]</th>\
-         <th>optimise [s]</th><th>evaluations</th></tr></thead>\n<tbody>\n",
-    );
-    for e in eps {
-        let (class, name) = match e.colour() {
-            Some(c) => (c.name(), c.name()),
-            None => ("unknown", "–"),
-        };
-        let name = match e.colour() {
-            Some(Colour::Green) => "all succeed",
-            Some(Colour::Yellow) => "some succeed",
-            Some(Colour::Red) => "none succeed",
-            None => name,
-        };
-        let _ = writeln!(
-            h,
-            "<tr><td class=\"num\">{}</td><td class=\"num\">{:.2} ± {:.2}</td>\
-             <td class=\"num\">{:.2}</td><td><span class=\"swatch {class}\"></span>{name}</td>\
-             <td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td>\
-             <td class=\"num\">{}</td></tr>",
-            e.index,
-            e.pred_mean,
-            e.pred_std,
-            e.recorded,
-            num(e.success_fraction, 2),
-            num(e.train_s, 1),
-            num(e.optimise_s, 1),
-            e.evaluations.map_or_else(|| "–".into(), |v| v.to_string()),
-        );
-    }
-    h.push_str("</tbody></table>\n");
+    table(h, "episodes", &tables::episodes(run));
 }
 
 fn thesis(h: &mut String, run: &Run) {
     h.push_str("<h2>Against the thesis</h2>\n");
-    let Some(claims) = &run.summary.thesis_reference else {
-        h.push_str("<p>summary.json has no thesis_reference.</p>\n");
-        return;
-    };
-    if claims.is_empty() {
-        h.push_str("<p>No thesis claims apply to this experiment.</p>\n");
-        return;
+    match tables::thesis(run) {
+        None => h.push_str("<p>summary.json has no thesis_reference.</p>\n"),
+        Some(t) if t.rows.is_empty() => {
+            h.push_str("<p>No thesis claims apply to this experiment.</p>\n");
+        }
+        Some(t) => table(h, "thesis", &t),
     }
-    h.push_str(
-        "<table class=\"thesis\">\n<thead><tr><th>claim</th><th>thesis</th><th>measured</th>\
-         <th>verdict</th><th>accepted when</th></tr></thead>\n<tbody>\n",
-    );
-    for c in claims {
-        let (class, verdict) = match c.pass {
-            Some(true) => ("pass", "PASS"),
-            Some(false) => ("fail", "FAIL"),
-            None => ("na", "undecided"),
-        };
-        let _ = writeln!(
-            h,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td class=\"{class}\">{verdict}</td>\
-             <td>{}</td></tr>",
-            esc(&c.claim),
-            esc(&c.thesis),
-            esc(&c.measured),
-            esc(&crate::acceptance::rule_text(c.across_seeds))
-        );
-    }
-    h.push_str("</tbody></table>\n");
 }
 
 fn totals(h: &mut String, run: &Run) {
-    let s = &run.summary;
     h.push_str("<h2>Totals</h2>\n<table class=\"totals\"><tbody>\n");
-    for (k, v) in [
-        ("interaction time [s]", num(s.interaction_s, 1)),
-        ("wall time [s]", num(s.wall_s, 1)),
-        (
-            "mean wall time per policy update [s]",
-            num(s.wall_per_update(), 1),
-        ),
-        ("policy updates", s.episodes.len().to_string()),
-        ("solved at", s.solved_text()),
-        ("code (commit, subnormals) per update", s.sessions_text()),
-        ("updates from a recorded run", s.replayed_text()),
-        ("roll-outs the system ended early", run.ended_early_text()),
-    ] {
-        let _ = writeln!(h, "<tr><th>{k}</th><td class=\"num\">{}</td></tr>", esc(&v));
+    for (k, v) in tables::totals(run) {
+        let _ = writeln!(h, "<tr><th>{}</th>{}</tr>", esc(k), html_cell(&v));
     }
     h.push_str("</tbody></table>\n");
 }

@@ -4,17 +4,19 @@
 //! predictions.jsonl and final_eval.jsonl (format: `crates/experiments`' run directories), and
 //! writes into DIR:
 //!
-//! * `returns`: predicted return ± 1.96σ per policy update against the recorded return;
+//! * `returns`: predicted return ± 1.96σ per policy update against the recorded return (and
+//!   every further roll-out's);
 //! * `policy`: the final policy's actions over time against the applied ones;
-//! * `prediction_first`, `prediction_last`: long-term state predictions against the recording;
+//! * `prediction_first`, `prediction_last`: long-term state predictions of the first and the
+//!   final policy against the recording (from the start distribution nearest the roll-out's);
 //! * `cost_first`, `cost_last`: predicted against recorded immediate cost;
-//! * arm runs: `paths` (x–y paths with wall and hole) and, with final_eval.jsonl, `final_eval`;
+//! * arm runs: `paths` (x–y paths with wall and hole) and, with final_eval.jsonl, `final_eval`
+//!   (y(t) and the contact force from fresh starts);
 //!
 //! each as PNG and SVG, `report.html` with the settings, per-update results, the thesis
-//! comparison, totals and every PNG inlined, and `report.md` with those tables as Markdown,
-//! the per-update and totals tables with more columns (end position, largest force, GP
-//! points, model, gains) than the page's. Runs from before a file or field existed still get a report; what could not be
-//! drawn is listed in it.
+//! comparison, totals and every PNG inlined, and `report.md` with the same tables as Markdown
+//! (both built by one module). Runs from before a file or field existed still get a report;
+//! what could not be drawn is listed in it.
 //!
 //! [`acceptance_markdown`] reads the summary.json of several runs and tabulates each thesis claim
 //! over the seeds with its acceptance verdict (issue 6).
@@ -31,6 +33,7 @@ mod json;
 pub mod jsonl;
 mod markdown;
 mod plot;
+mod tables;
 
 #[cfg(test)]
 #[path = "../tests/common/synthetic.rs"]

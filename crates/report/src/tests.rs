@@ -93,6 +93,11 @@ fn vil_run_gets_every_plot_but_final_eval() {
         "swatch green",
         "swatch red",
         "205.8",
+        // The same columns as report.md (tables.rs builds both).
+        "<th>final x (m)</th>",
+        "<th>max force (N)</th>",
+        "<th>k_y mean ± std (N/m)</th>",
+        "<th>initial roll-out&#39;s return</th>",
     ] {
         assert!(page.contains(want), "report lacks {want:?}");
     }
@@ -120,6 +125,22 @@ fn vilta_var_adds_final_eval_and_yellow_updates() {
     let page = html(tmp.path());
     assert!(page.contains("swatch yellow"));
     assert!(page.contains("start_y_range"));
+    // Yellow updates get the success-fraction column.
+    assert!(page.contains("<th>success fraction</th>"));
+
+    // Every roll-out after an update's first is drawn, with the return its costs sum to.
+    let run = crate::data::Run::load(tmp.path()).unwrap();
+    let others = crate::figures::other_rollout_returns(&run);
+    assert_eq!(
+        others.len(),
+        run.summary.episodes.len() * 3,
+        "3 more per update"
+    );
+    let rollouts = run.rollouts.as_ref().unwrap();
+    let second_of_update_1 = rollouts.iter().filter(|r| r.episode == 1).nth(1).unwrap();
+    let sum: f64 = second_of_update_1.costs.as_ref().unwrap().iter().sum();
+    assert_eq!(others[0], (1.0, sum));
+    assert!(caption_from(tmp.path(), "Predicted return (mean").contains("Small circles"));
 }
 
 /// The report page's text from `start` up to the next tag: a caption.
@@ -257,6 +278,18 @@ fn the_final_policy_plots_show_the_update_the_final_evaluation_chose() {
     assert!(files.notes.is_empty(), "{:?}", files.notes);
     let page = html(tmp.path());
     assert!(page.contains("Final policy (update 3)"), "policy caption");
+    // The end-of-run predictions show the handed-over policy too, and the returns plot marks it.
+    let last = caption_from(tmp.path(), "Long-term prediction of the final policy");
+    assert!(
+        last.contains(&crate::html::esc(
+            "(update 3, the final evaluation's choice; the last update is 5)"
+        )),
+        "{last}"
+    );
+    let cost = caption_from(tmp.path(), "Immediate cost of the final policy");
+    assert!(cost.contains("update 3"), "{cost}");
+    let returns = caption_from(tmp.path(), "Predicted return (mean");
+    assert!(returns.contains("Dashed line: update 3"), "{returns}");
     assert!(
         page.contains(&crate::html::esc(
             "update 3's, chosen by vilta.final_policy"

@@ -224,12 +224,12 @@ pub(super) fn parse_prediction(n: Node<'_>) -> Result<Prediction, ReportError> {
             })
         })
     })?;
-    let steps = starts.into_iter().next().unwrap_or_default();
-    if steps.is_empty() {
+    if starts.is_empty() || starts.iter().any(Vec::is_empty) {
         return n.req("starts", |s| {
-            Err(s.malformed("a first start distribution with at least one step"))
+            Err(s.malformed("start distributions of at least one step each"))
         });
     }
+    let steps = &starts[0];
     let (ds, da) = dims.unwrap_or_default();
     let names = |key: &str, d: usize, fallback: &str| -> Result<Vec<String>, ReportError> {
         n.with(key, |v| match v {
@@ -268,7 +268,7 @@ pub(super) fn parse_prediction(n: Node<'_>) -> Result<Prediction, ReportError> {
             })
             .transpose()
         })?,
-        steps,
+        starts,
     })
 }
 

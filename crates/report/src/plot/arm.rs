@@ -39,7 +39,14 @@ struct Scene<'a> {
     path_labels: Vec<Option<String>>,
     n_updates: usize,
     start: Option<(f64, (f64, f64))>,
+    /// A fixed start position (no start interval), marked by a dot.
+    start_point: Option<(f64, f64)>,
+    /// Where each roll-out the system ended early stopped (a diverged arm), marked by a cross.
+    ended_early: Vec<(f64, f64)>,
 }
+
+const ENDED_EARLY: &str = "end of a roll-out the system ended early (on the border: beyond it)";
+const START: &str = "start";
 
 impl Figure for Paths<'_> {
     fn size(&self) -> (u32, u32) {
@@ -56,11 +63,16 @@ impl Figure for Paths<'_> {
         let n_updates = paths.iter().map(|p| p.0).max().unwrap_or(0).max(1) as usize;
         let mut labelled = std::collections::BTreeSet::new();
         let first_update = paths.iter().map(|p| p.0).filter(|&e| e > 0).min();
+        // The first, middle and last updates label the colour gradient.
+        let middle = first_update.map(|f| (f + n_updates as u64) / 2);
         let path_labels = paths
             .iter()
             .map(|(episode, _)| {
                 let e = *episode;
-                let wanted = e == 0 || Some(e) == first_update || e as usize == n_updates;
+                let wanted = e == 0
+                    || Some(e) == first_update
+                    || Some(e) == middle
+                    || e as usize == n_updates;
                 if !wanted || !labelled.insert(e) {
                     return None;
                 }
@@ -71,20 +83,38 @@ impl Figure for Paths<'_> {
             })
             .collect();
         let start_x = paths.iter().find_map(|p| p.1.first().map(|q| q.0));
+        let first_point = paths.iter().find_map(|p| p.1.first().copied());
+        let ended_early: Vec<(f64, f64)> = self
+            .rollouts
+            .iter()
+            .zip(&paths)
+            .filter(|(r, _)| r.stopped_early.is_some())
+            .filter_map(|(_, p)| p.1.last().copied())
+            .collect();
         let scene = Scene {
             g,
             start: start_x.zip(self.start_y_range),
+            start_point: first_point.filter(|_| self.start_y_range.is_none()),
             paths,
             path_labels,
             n_updates,
+            ended_early,
         };
 
         let (full, zoom) = root.split_horizontally(900);
         let sy = self.start_y_range.map(|(a, b)| [a, b]).unwrap_or_default();
         let hole = [g.hole_y - g.hole_r, g.hole_y + g.hole_r];
-        let xs = scene.paths.iter().flat_map(|p| p.1.iter().map(|q| q.0));
+        // The view fits the roll-outs that ran to the end; one that diverged (the arm flung
+        // across the workspace) is cut at the border and its end marked, not allowed to
+        // shrink the rest into a corner.
+        let kept = self.rollouts.iter().zip(&scene.paths);
+        let kept: Vec<&Vec<(f64, f64)>> = kept
+            .filter(|(r, _)| r.stopped_early.is_none())
+            .map(|(_, p)| &p.1)
+            .collect();
+        let xs = kept.iter().flat_map(|p| p.iter().map(|q| q.0));
         let x = range(xs.chain([g.wall_x, g.end_x]), 0.08);
-        let ys = scene.paths.iter().flat_map(|p| p.1.iter().map(|q| q.1));
+        let ys = kept.iter().flat_map(|p| p.iter().map(|q| q.1));
         let y = range(ys.chain(hole).chain(sy), 0.08);
         scene.panel(&full, "TCP paths of every roll-out", x, y, true)?;
 
@@ -138,6 +168,10 @@ impl Scene<'_> {
             let mut labels = vec![WALL.to_string(), face_label.clone()];
             labels.extend(self.path_labels.iter().flatten().cloned());
             labels.extend(start_label.clone());
+            labels.extend(self.start_point.map(|_| START.to_string()));
+            if !self.ended_early.is_empty() {
+                labels.push(ENDED_EARLY.into());
+            }
             let mut occ = Occupied::default();
             occ.band(&[g.wall_x, x.1], &[y.0, y.0], &[y.1, y.1]);
             self.paths
@@ -196,6 +230,28 @@ impl Scene<'_> {
                 .label(label)
                 .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], RECORDED.stroke_width(4)));
         }
+        let inside = |p: &&(f64, f64)| (x.0..=x.1).contains(&p.0) && (y.0..=y.1).contains(&p.1);
+        if let Some(p) = self.start_point.filter(|p| inside(&p)) {
+            c.draw_series(std::iter::once(Circle::new(p, 6, RECORDED.filled())))?
+                .label(START)
+                .legend(|(x, y)| Circle::new((x + 9, y), 5, RECORDED.filled()));
+        }
+        // In the full view an end outside it is marked on the border, where the cut path
+        // leaves; the zoom marks only the ends inside it.
+        let on_view = |p: &(f64, f64)| (p.0.clamp(x.0, x.1), p.1.clamp(y.0, y.1));
+        let crosses: Vec<(f64, f64)> = match with_legend {
+            true => self.ended_early.iter().map(on_view).collect(),
+            false => self.ended_early.iter().filter(inside).copied().collect(),
+        };
+        if !crosses.is_empty() {
+            c.draw_series(
+                crosses
+                    .into_iter()
+                    .map(|p| Cross::new(p, 8, FAIL_RED.stroke_width(3))),
+            )?
+            .label(ENDED_EARLY)
+            .legend(|(x, y)| Cross::new((x + 9, y), 6, FAIL_RED.stroke_width(3)));
+        }
         match pos {
             Some(pos) => legend(&mut c, pos),
             None => Ok(()),
@@ -212,9 +268,85 @@ pub(crate) struct FinalEvalPlot<'a> {
     pub dt: Option<f64>,
 }
 
+/// A start's success and its curve of (time, value) points.
+type Curve = (bool, Vec<(f64, f64)>);
+
+/// The contact force magnitude |f| at each step end, from a true state's (f_x, f_y) at
+/// entries 4 and 5 (the arm's state layout); `None` for states without them.
+fn force_curve(e: &FinalEval, dt: f64) -> Option<Vec<(f64, f64)>> {
+    let pts = e.true_states.iter().enumerate();
+    pts.map(|(k, s)| Some((k as f64 * dt, s.get(4)?.hypot(*s.get(5)?))))
+        .collect()
+}
+
+impl FinalEvalPlot<'_> {
+    /// Every start's |f|(t) with its success, when every start recorded forces.
+    fn force_curves(&self) -> Option<Vec<Curve>> {
+        let dt = self.dt.unwrap_or(1.0);
+        let curves: Option<Vec<_>> = self
+            .evals
+            .iter()
+            .map(|e| Some((e.success, force_curve(e, dt)?)))
+            .collect();
+        curves.filter(|c| !c.is_empty() && c.iter().all(|(_, f)| !f.is_empty()))
+    }
+
+    /// |f|(t) of every start, coloured as in the y(t) panel: a start that inserts by ramming
+    /// the end wall looks like any other in y(t).
+    fn draw_forces<DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        forces: &[Curve],
+    ) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let mut peaks: Vec<f64> = forces
+            .iter()
+            .map(|(_, c)| c.iter().map(|p| p.1).fold(0.0, f64::max))
+            .collect();
+        peaks.sort_by(f64::total_cmp);
+        let median = peaks[peaks.len() / 2];
+        let highest = peaks[peaks.len() - 1];
+        let title = format!(
+            "Contact force |f| from the same starts: largest per start median {median:.0} N, \
+             at most {highest:.0} N"
+        );
+        let x = range(forces.iter().flat_map(|c| c.1.iter().map(|q| q.0)), 0.0);
+        let y = range(
+            forces
+                .iter()
+                .flat_map(|c| c.1.iter().map(|q| q.1))
+                .chain([0.0]),
+            0.08,
+        );
+        let axes = Axes {
+            title: &title,
+            x,
+            y,
+            x_desc: if self.dt.is_some() {
+                "time [s]"
+            } else {
+                "step"
+            },
+            y_desc: "|f| [N]",
+            integer_x: false,
+        };
+        let mut c = chart(area, &axes)?;
+        for (success, curve) in forces {
+            let colour = if *success { OK_GREEN } else { FAIL_RED };
+            c.draw_series(segments(curve.iter().copied(), colour.stroke_width(2)))?;
+        }
+        Ok(())
+    }
+}
+
 impl Figure for FinalEvalPlot<'_> {
     fn size(&self) -> (u32, u32) {
-        (1000, 600)
+        match self.force_curves() {
+            Some(_) => (1000, 960),
+            None => (1000, 600),
+        }
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
@@ -222,7 +354,15 @@ impl Figure for FinalEvalPlot<'_> {
         DB::ErrorType: 'static,
     {
         let dt = self.dt.unwrap_or(1.0);
-        let curves: Vec<(bool, Vec<(f64, f64)>)> = self
+        let root = &match self.force_curves() {
+            Some(f) => {
+                let (top, bottom) = root.split_vertically(root.dim_in_pixel().1 * 3 / 5);
+                self.draw_forces(&bottom, &f)?;
+                top
+            }
+            None => root.clone(),
+        };
+        let curves: Vec<Curve> = self
             .evals
             .iter()
             .map(|e| {

@@ -102,6 +102,30 @@ pub(crate) fn range(vals: impl IntoIterator<Item = f64>, pad: f64) -> (f64, f64)
     }
 }
 
+/// How far past the drawn data (means and recordings) a prediction band may stretch the
+/// y-axis, as a fraction of the data's span on each side. A long prediction's ±2σ band can be
+/// 20× wider than everything recorded (ẋ to ±4 m/s against 0.3 m/s of data), which would draw
+/// the recording and the mean as flat lines; beyond this the band is cut at the axis.
+pub(crate) const BAND_REACH: f64 = 0.5;
+
+/// The y-range of a panel showing `data` (means, recordings) and the band `lo..hi`: all of the
+/// band when it stays within [`BAND_REACH`] of the data's span, else the data's range widened
+/// by that much; and whether the band was cut.
+pub(crate) fn band_view(
+    data: impl IntoIterator<Item = f64>,
+    lo: &[f64],
+    hi: &[f64],
+    pad: f64,
+) -> ((f64, f64), bool) {
+    let (d_lo, d_hi) = range(data, 0.0);
+    let reach = BAND_REACH * (d_hi - d_lo);
+    let (b_lo, b_hi) = range(lo.iter().chain(hi).copied(), 0.0);
+    let lowest = b_lo.max(d_lo - reach).min(d_lo);
+    let highest = b_hi.min(d_hi + reach).max(d_hi);
+    let cut = b_lo < lowest || b_hi > highest;
+    (range([lowest, highest], pad), cut)
+}
+
 /// What one chart shows along its axes.
 pub(crate) struct Axes<'s> {
     pub title: &'s str,
@@ -461,8 +485,9 @@ pub(crate) fn pretty(name: &str) -> (String, Option<String>) {
         "fy" | "f_y" => Some(("f_y", "N")),
         "k_x" | "kx" => Some(("k_x", "N/m")),
         "k_y" | "ky" => Some(("k_y", "N/m")),
-        "dx_ref" => Some(("Δx_ref", "m")),
-        "dy_ref" => Some(("Δy_ref", "m")),
+        // Increments of the reference per controller tick (`vilta.delta_tick`), not per step.
+        "dx_ref" => Some(("Δx_ref", "m per tick")),
+        "dy_ref" => Some(("Δy_ref", "m per tick")),
         "theta" => Some(("θ", "rad")),
         "dtheta" => Some(("dθ/dt", "rad/s")),
         "v" => Some(("v", "m/s")),
@@ -536,6 +561,20 @@ pub(crate) fn panels<DB: DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_band_far_wider_than_the_data_is_cut_and_a_narrow_one_is_not() {
+        let data = [0.0, 1.0];
+        // Within half the data's span on each side: all of the band shows.
+        let (y, cut) = band_view(data, &[-0.4], &[1.3], 0.0);
+        assert_eq!((y, cut), ((-0.4, 1.3), false));
+        // A band 20× the data's span is cut at half that span past the data.
+        let (y, cut) = band_view(data, &[-10.0], &[10.0], 0.0);
+        assert_eq!((y, cut), ((-0.5, 1.5), true));
+        // Cut on one side only.
+        let (y, cut) = band_view(data, &[0.2], &[10.0], 0.0);
+        assert_eq!((y, cut), ((0.0, 1.5), true));
+    }
 
     #[test]
     fn range_survives_flat_empty_and_nan() {

@@ -14,6 +14,8 @@ use plotters::prelude::*;
 
 pub(crate) struct Policy<'a> {
     pub pred: &'a Prediction,
+    /// Which of the prediction's start distributions to draw.
+    pub start: usize,
     pub last: Option<&'a Rollout>,
     pub initial: Option<&'a Rollout>,
 }
@@ -52,14 +54,14 @@ impl Figure for Policy<'_> {
     {
         let p = self.pred;
         let dt = p.dt;
-        let t0 = p.steps.first().map_or(0.0, |s| s.t - dt);
+        let steps = p.steps(self.start);
+        let t0 = steps.first().map_or(0.0, |s| s.t - dt);
         for (j, area) in panels(root, p.action_names.len()).iter().enumerate() {
             let Some(name) = p.action_names.get(j) else {
                 break;
             };
-            let mean: Vec<f64> = p.steps.iter().map(|s| s.action_mean[j]).collect();
-            let sd: Vec<f64> = p
-                .steps
+            let mean: Vec<f64> = steps.iter().map(|s| s.action_mean[j]).collect();
+            let sd: Vec<f64> = steps
                 .iter()
                 .map(|s| 2.0 * std_of(s.action_var[j]))
                 .collect();
@@ -77,7 +79,12 @@ impl Figure for Policy<'_> {
                 y_vals.chain(others.flat_map(|(_, v)| v.iter().copied())),
                 0.06,
             );
-            let title = format!("{} — final policy (update {})", pretty(name).0, p.episode);
+            let title = format!(
+                "{} — final policy (update {}{})",
+                pretty(name).0,
+                p.episode,
+                p.start_label(self.start)
+            );
             let y_desc = axis_label(name);
             let mut axes = Axes {
                 title: &title,

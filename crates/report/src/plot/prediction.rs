@@ -2,8 +2,9 @@
 //! the same policy was rolled out, and (d) the predicted immediate cost against the recorded
 //! one. A prediction far off the recording shows where the GP model was wrong.
 
-use super::{axis_label, chart, draw_prediction, grid_size, legend, panels, pretty, range, std_of};
+use super::{axis_label, band_view, chart, draw_prediction, grid_size, legend, panels, pretty};
 use super::{place_legend, segments, Axes, DrawResult, Figure, Occupied, RECORDED};
+use super::{range, std_of};
 use crate::data::{Prediction, Rollout};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -13,6 +14,8 @@ const MEAN: &str = "predicted mean";
 
 pub(crate) struct StatePrediction<'a> {
     pub pred: &'a Prediction,
+    /// Which of the prediction's start distributions to draw.
+    pub start: usize,
     pub rollout: Option<&'a Rollout>,
 }
 
@@ -26,13 +29,14 @@ impl Figure for StatePrediction<'_> {
         DB::ErrorType: 'static,
     {
         let p = self.pred;
-        let ts: Vec<f64> = p.steps.iter().map(|s| s.t).collect();
+        let steps = p.steps(self.start);
+        let ts: Vec<f64> = steps.iter().map(|s| s.t).collect();
         for (i, area) in panels(root, p.state_names.len()).iter().enumerate() {
             let Some(name) = p.state_names.get(i) else {
                 break;
             };
-            let mean: Vec<f64> = p.steps.iter().map(|s| s.mean[i]).collect();
-            let sd: Vec<f64> = p.steps.iter().map(|s| 2.0 * std_of(s.var[i])).collect();
+            let mean: Vec<f64> = steps.iter().map(|s| s.mean[i]).collect();
+            let sd: Vec<f64> = steps.iter().map(|s| 2.0 * std_of(s.var[i])).collect();
             let lo: Vec<f64> = mean.iter().zip(&sd).map(|(m, s)| m - s).collect();
             let hi: Vec<f64> = mean.iter().zip(&sd).map(|(m, s)| m + s).collect();
             // true_states[0] is the start, true_states[k] the state k steps later.
@@ -52,9 +56,15 @@ impl Figure for StatePrediction<'_> {
                     .chain(truth.iter().map(|q| q.0)),
                 0.0,
             );
-            let y_vals = lo.iter().chain(&hi).copied();
-            let y = range(y_vals.chain(truth.iter().map(|q| q.1)), 0.06);
-            let title = format!("{} — update {}", pretty(name).0, p.episode);
+            let data = mean.iter().copied().chain(truth.iter().map(|q| q.1));
+            let (y, cut) = band_view(data, &lo, &hi, 0.06);
+            let title = format!(
+                "{} — update {}{}{}",
+                pretty(name).0,
+                p.episode,
+                p.start_label(self.start),
+                if cut { " (band cut at the axis)" } else { "" }
+            );
             let y_desc = axis_label(name);
             let mut axes = Axes {
                 title: &title,
@@ -95,6 +105,8 @@ impl Figure for StatePrediction<'_> {
 
 pub(crate) struct CostPrediction<'a> {
     pub pred: &'a Prediction,
+    /// Which of the prediction's start distributions to draw.
+    pub start: usize,
     /// The recorded weighted cost per step and the roll-out's update index.
     pub recorded: Option<(&'a [f64], u64)>,
 }
@@ -110,7 +122,7 @@ impl Figure for CostPrediction<'_> {
     {
         let p = self.pred;
         let (mut ts, mut mean, mut sd) = (Vec::new(), Vec::new(), Vec::new());
-        for s in &p.steps {
+        for s in p.steps(self.start) {
             if let Some((m, sdev)) = s.weighted_cost {
                 ts.push(s.t);
                 mean.push(m);
@@ -136,7 +148,11 @@ impl Figure for CostPrediction<'_> {
         );
         let y_vals = lo.iter().chain(&hi).copied().chain([0.0]);
         let y = range(y_vals.chain(rec.iter().map(|q| q.1)), 0.06);
-        let title = format!("Immediate cost — update {}", p.episode);
+        let title = format!(
+            "Immediate cost — update {}{}",
+            p.episode,
+            p.start_label(self.start)
+        );
         let mut axes = Axes {
             title: &title,
             x,

@@ -10,6 +10,12 @@ use plotters::prelude::*;
 pub(crate) struct Returns<'a> {
     pub episodes: &'a [Episode],
     pub initial_return: Option<f64>,
+    /// (update, recorded return) of each roll-out after an update's first: runs with several
+    /// roll-outs per update (`vilta-var`) show what the colour summarises.
+    pub other_rollouts: Vec<(f64, f64)>,
+    /// The update whose policy the run hands over when it is not the last one
+    /// (`vilta.final_policy`), marked by a vertical line.
+    pub final_policy: Option<u64>,
 }
 
 /// The thesis's 95 % confidence intervals.
@@ -18,6 +24,8 @@ const MARKER: i32 = 6;
 const BAND: &str = "predicted ±1.96σ (95 %)";
 const MEAN: &str = "predicted mean";
 const INITIAL: &str = "initial roll-out";
+const OTHERS: &str = "recorded: the update's other roll-outs";
+const OTHER_MARKER: i32 = 3;
 
 impl Figure for Returns<'_> {
     fn size(&self) -> (u32, u32) {
@@ -36,6 +44,7 @@ impl Figure for Returns<'_> {
         let x = (x.0 - 0.5, x.1 + 0.5);
         let y_vals = lo.iter().chain(&hi).copied();
         let y_vals = y_vals.chain(eps.iter().map(|e| e.recorded));
+        let y_vals = y_vals.chain(self.other_rollouts.iter().map(|p| p.1));
         let y = range(y_vals.chain(self.initial_return), 0.08);
         let group = |want: Option<Colour>| -> Vec<(f64, f64)> {
             eps.iter()
@@ -67,6 +76,16 @@ impl Figure for Returns<'_> {
                 labels.push(label.to_string());
             }
         }
+        self.other_rollouts.iter().for_each(|&p| occ.line([p]));
+        if !self.other_rollouts.is_empty() {
+            labels.push(OTHERS.into());
+        }
+        let final_label = self
+            .final_policy
+            .map(|u| format!("final policy (update {u})"));
+        // The final policy's line spans the whole height wherever the legend goes; the legend
+        // may cover a stretch of it.
+        labels.extend(final_label.clone());
         let mut axes = Axes {
             title: "Expected and recorded return per policy update",
             x,
@@ -115,6 +134,29 @@ impl Figure for Returns<'_> {
             ))?
             .label(INITIAL)
             .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], GREY.stroke_width(2)));
+        }
+
+        if let (Some(u), Some(label)) = (self.final_policy, final_label) {
+            let (u, y) = (u as f64, axes.y);
+            c.draw_series(DashedLineSeries::new(
+                [(u, y.0), (u, y.1)],
+                6,
+                4,
+                RECORDED.mix(0.6).stroke_width(2),
+            ))?
+            .label(label)
+            .legend(|(x, y)| {
+                PathElement::new([(x + 9, y - 7), (x + 9, y + 7)], RECORDED.stroke_width(2))
+            });
+        }
+        if !self.other_rollouts.is_empty() {
+            c.draw_series(
+                self.other_rollouts
+                    .iter()
+                    .map(|&p| Circle::new(p, OTHER_MARKER, RECORDED.stroke_width(1))),
+            )?
+            .label(OTHERS)
+            .legend(|(x, y)| Circle::new((x + 6, y), OTHER_MARKER, RECORDED.stroke_width(1)));
         }
 
         let edge = RECORDED.stroke_width(1);

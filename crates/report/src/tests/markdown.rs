@@ -85,7 +85,7 @@ fn markdown_report_has_a_row_per_update_and_every_claim() {
         assert_eq!(row[0], e["index"].to_string());
         assert_eq!(
             row[2],
-            format!("{:.1}", e["recorded_return"].as_f64().unwrap())
+            format!("{:.2}", e["recorded_return"].as_f64().unwrap())
         );
         assert_eq!(row[3], e["colour"].as_str().unwrap());
         assert_eq!(row[4], format!("{:.3}", e["final_x"].as_f64().unwrap()));
@@ -111,7 +111,7 @@ fn markdown_report_has_a_row_per_update_and_every_claim() {
     assert_eq!(value("solved at"), "update 4");
     assert_eq!(
         value("mean wall time per update (s)"),
-        format!("{:.0}", 1234.5 / eps.len() as f64)
+        format!("{:.1}", 1234.5 / eps.len() as f64)
     );
 }
 
