@@ -83,8 +83,20 @@ fn compact(v: &Value) -> String {
             let items: Vec<String> = items.iter().map(compact).collect();
             format!("[{}]", items.join(", "))
         }
+        Value::Number(n) => match n.as_f64().filter(|_| n.is_f64()) {
+            Some(v) => short_float(v),
+            None => n.to_string(),
+        },
         other => other.to_string(),
     }
+}
+
+/// A float at 12 significant digits, shortest form: settings derived by arithmetic
+/// (`geometry.wall_x` = 0.7 − 0.05) read 0.65, not 0.6499999999999999.
+fn short_float(v: f64) -> String {
+    let rounded = format!("{v:.11e}").parse::<f64>().unwrap_or(v);
+    // serde_json's own form: exponents for tiny and huge values, as the run files have them.
+    serde_json::Number::from_f64(rounded).map_or_else(|| v.to_string(), |n| n.to_string())
 }
 
 fn image(plot: &Plot) -> Result<String, ReportError> {

@@ -314,6 +314,26 @@ fn the_final_policy_plots_show_the_update_the_final_evaluation_chose() {
 }
 
 #[test]
+fn settings_show_floats_without_rounding_noise() {
+    let tmp = TempDir::new("settings-floats");
+    write_run(tmp.path(), Kind::Vil);
+    edit_json(&tmp.path().join("summary.json"), |v| {
+        v["config"]["geometry"]["wall_x"] = serde_json::json!(0.7 - 0.05);
+        v["config"]["start"]["prediction_std"] = serde_json::json!([0.002, 1e-300, 0.1 + 0.2]);
+    });
+    write_report(tmp.path()).unwrap();
+    let page = html(tmp.path());
+    assert!(
+        page.contains("<td>geometry.wall_x</td><td>0.65</td>"),
+        "wall_x"
+    );
+    assert!(
+        page.contains("<td>start.prediction_std</td><td>[0.002, 1e-300, 0.3]</td>"),
+        "prediction_std"
+    );
+}
+
+#[test]
 fn pendulum_run_has_no_arm_plots() {
     let tmp = TempDir::new("pendulum");
     write_run(tmp.path(), Kind::Pendulum);
