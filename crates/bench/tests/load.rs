@@ -1,7 +1,6 @@
 //! `W1::load` checks the workload against its declared sizes: a malformed copy of `w1.json`
 //! is an error naming the file and the field, never a panic when the problem is built.
 
-use std::path::PathBuf;
 use vicpilco_bench::{WorkloadError, W1};
 
 /// The shipped workload as JSON, or `None` (with a notice) where `../shared/bench` is absent
@@ -19,11 +18,24 @@ fn shipped_workload() -> Option<serde_json::Value> {
 }
 
 /// `workload` written to a fresh file, loaded.
-fn load_written(name: &str, workload: &serde_json::Value) -> (PathBuf, Result<W1, WorkloadError>) {
-    let path = std::env::temp_dir().join(format!("vicpilco-w1-{}-{name}.json", std::process::id()));
-    std::fs::write(&path, workload.to_string()).unwrap();
-    let loaded = W1::load(&path);
-    (path, loaded)
+/// `text` in a temporary file that is removed when the handle drops.
+fn written(name: &str, text: &str) -> tempfile::NamedTempFile {
+    let file = tempfile::Builder::new()
+        .prefix(&format!("vicpilco-w1-{name}-"))
+        .suffix(".json")
+        .tempfile()
+        .unwrap();
+    std::fs::write(file.path(), text).unwrap();
+    file
+}
+
+fn load_written(
+    name: &str,
+    workload: &serde_json::Value,
+) -> (tempfile::NamedTempFile, Result<W1, WorkloadError>) {
+    let file = written(name, &workload.to_string());
+    let loaded = W1::load(file.path());
+    (file, loaded)
 }
 
 #[test]
@@ -76,11 +88,10 @@ fn a_malformed_workload_is_refused_naming_the_field() {
             .unwrap_or_else(|| panic!("{name}: loaded"))
             .to_string();
         assert!(
-            err.starts_with(&path.display().to_string()),
+            err.starts_with(&path.path().display().to_string()),
             "{name}: {err}"
         );
         assert!(err.contains(expected), "{name}: {err}");
-        let _ = std::fs::remove_file(path);
     }
 }
 
@@ -98,10 +109,8 @@ fn a_number_beyond_the_f64_range_is_a_parse_error() {
         text.contains("1e400"),
         "the workload's gamma was not written as 1.0"
     );
-    let path = std::env::temp_dir().join(format!("vicpilco-w1-{}-huge.json", std::process::id()));
-    std::fs::write(&path, text).unwrap();
-    let err = W1::load(&path).expect_err("refused").to_string();
-    let _ = std::fs::remove_file(&path);
+    let file = written("huge", &text);
+    let err = W1::load(file.path()).expect_err("refused").to_string();
     assert!(
         err.contains("not a valid workload: number out of range"),
         "{err}"

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use vicpilco_experiments::evaluate::{evaluate, markdown_table, EvaluateOptions};
 use vicpilco_experiments::{run, ExperimentError, RecordedRunOptions, RunOptions};
 
-fn scratch(name: &str) -> PathBuf {
+fn scratch(name: &str) -> common::Scratch {
     common::scratch("evaluate", name)
 }
 
@@ -105,7 +105,6 @@ fn the_final_policy_repeats_the_final_evaluation_and_each_update_reads_its_own_p
         );
         assert_ne!(changed.final_position, first.final_position);
     }
-    let _ = std::fs::remove_dir_all(&base);
 }
 
 #[test]
@@ -187,7 +186,6 @@ fn what_evaluate_cannot_do_is_an_error_naming_why() {
         m.contains("cannot evaluate") && m.contains("no policy of update 0"),
         "{m}"
     );
-    let _ = std::fs::remove_dir_all(&base);
 }
 
 /// `vilta.final_policy = "most-successful"` hands over the policy of the latest update whose own
@@ -270,5 +268,4 @@ fn the_most_successful_rule_evaluates_the_best_update_also_of_a_finished_run() {
         differs_from_last,
         "update 2's policy would have ended elsewhere"
     );
-    let _ = std::fs::remove_dir_all(&base);
 }

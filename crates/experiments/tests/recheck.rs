@@ -7,7 +7,7 @@ mod common;
 #[path = "../../report/tests/common/stored_runs.rs"]
 mod stored_runs;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use stored_runs::{every_run, repo_dir, settings_file};
 use vicpilco_experiments::recheck::recheck;
 use vicpilco_experiments::ExperimentError;
@@ -19,7 +19,7 @@ fn read_json(path: &Path) -> serde_json::Value {
 
 /// A copy of the stored vilta seed 3 summary (complete, never inserting) in a scratch
 /// directory, with its "3 consecutive" claim worded as builds before 773c412 wrote it.
-fn stale_vilta_run(name: &str) -> (PathBuf, serde_json::Value) {
+fn stale_vilta_run(name: &str) -> (common::Scratch, serde_json::Value) {
     let dir = common::scratch("recheck", name);
     std::fs::create_dir_all(&dir).unwrap();
     let mut summary = read_json(&repo_dir("results/vilta-seed3/summary.json"));

@@ -4,14 +4,14 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use vicpilco_experiments::{config, run, RunOptions};
 
 /// The bound the test sets: small enough that the scan's reference, which leads the TCP by
 /// well over 10 cm once the peg meets the face, is held back by it.
 const LEAD: f64 = 0.03;
 
-fn scratch(name: &str) -> PathBuf {
+fn scratch(name: &str) -> common::Scratch {
     common::scratch("search-lead", name)
 }
 

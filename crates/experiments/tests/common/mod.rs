@@ -1,13 +1,31 @@
 //! Helpers the experiment integration tests share.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// A fresh, not yet created directory under the system's temp dir, unique to this test
-/// process: `vicpilco-<prefix>-<pid>-<name>`.
-pub fn scratch(prefix: &str, name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vicpilco-{prefix}-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+/// A scratch directory under the system's temp dir, `vicpilco-<prefix>-<name>-XXXXXX`,
+/// removed when dropped (however the test ends). It derefs to its path.
+pub struct Scratch(tempfile::TempDir);
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+/// A new, empty [`Scratch`] directory.
+pub fn scratch(prefix: &str, name: &str) -> Scratch {
+    let dir = tempfile::Builder::new()
+        .prefix(&format!("vicpilco-{prefix}-{name}-"))
+        .tempdir()
+        .expect("create a scratch directory");
+    Scratch(dir)
 }
 
 /// Every line of a JSON-lines file (`rollouts.jsonl`, `final_eval.jsonl`, ...), parsed.
