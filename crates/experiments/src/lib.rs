@@ -520,17 +520,23 @@ where
     P: Policy + Clone + Sync,
     P::Cache: Send,
 {
+    // A replaying run's directory is made (and locked) by graft; the lock is held to the end.
+    let mut _graft_lock = None;
     let checkpoint = match (&opts.replay_from, opts.resume) {
         (_, true) => Some(read_checkpoint(&opts.out, name, opts.seed, &meta.identity)?),
-        (Some(source), false) => Some(replay::graft(
-            source,
-            name,
-            opts.seed,
-            &meta.identity,
-            &setup,
-            &opts.out,
-            env.dt(),
-        )?),
+        (Some(source), false) => {
+            let (checkpoint, lock) = replay::graft(
+                source,
+                name,
+                opts.seed,
+                &meta.identity,
+                &setup,
+                &opts.out,
+                env.dt(),
+            )?;
+            _graft_lock = lock;
+            Some(checkpoint)
+        }
         (None, false) => None,
     };
     let keep = checkpoint.as_ref().map(|c| c.state.completed);

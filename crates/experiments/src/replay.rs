@@ -3,7 +3,7 @@
 //! chooses the same models ([`vicpilco_learn::replay`]), and the run continues from the first
 //! update where the rules part, as if it had run from the start.
 
-use crate::record::{refuse_recorded_run, PER_UPDATE_FILES};
+use crate::record::{lock_run_dir, refuse_recorded_run, PER_UPDATE_FILES};
 use crate::record::{Checkpoint, CHECKPOINT_FORMAT};
 use crate::summary::{solved_at, write_json_atomic};
 use crate::ExperimentError;
@@ -39,7 +39,9 @@ pub struct ReplaySource {
 /// per-update files (the caller's resume drops their lines after it), and return that
 /// checkpoint. The source run must be of the same experiment and seed, with the same settings
 /// but `gp.model_selection` (and the number of updates); `out` must not hold a run yet
-/// ([`ExperimentError::RunExists`]).
+/// ([`ExperimentError::RunExists`]). When `out` does not exist yet, graft makes it and returns
+/// its lock too ([`crate::record::lock_run_dir`]), taken before anything is written into it,
+/// for the caller to hold for the run (an existing `out` was locked by the caller).
 pub fn graft<P>(
     source: &Path,
     experiment: &str,
@@ -48,7 +50,7 @@ pub fn graft<P>(
     setup: &LoopSetup<P>,
     out: &Path,
     dt: f64,
-) -> Result<Checkpoint, ExperimentError>
+) -> Result<(Checkpoint, Option<std::fs::File>), ExperimentError>
 where
     P: Policy + Clone + Sync,
     P::Cache: Send,
@@ -74,10 +76,14 @@ where
             },
         )
         .map_err(ExperimentError::from)?;
+    // A second lock on the directory from this process would find it busy (locks belong to
+    // open files), so only a directory made here is locked here.
+    let made_here = !out.is_dir();
     std::fs::create_dir_all(out).map_err(|e| ExperimentError::Io {
         path: out.to_path_buf(),
         source: e,
     })?;
+    let lock = made_here.then(|| lock_run_dir(out)).transpose()?;
     for file in PER_UPDATE_FILES {
         let from = source.join(file);
         std::fs::copy(&from, out.join(file)).map_err(|e| ExperimentError::Io {
@@ -130,7 +136,7 @@ where
     };
     let value = serde_json::to_value(&checkpoint).map_err(|e| ExperimentError::Write(e.into()))?;
     write_json_atomic(&out.join("checkpoint.json"), &value)?;
-    Ok(checkpoint)
+    Ok((checkpoint, lock))
 }
 
 /// The recorded run in `source`, checked to be of `experiment` and `seed` with `identity`'s

@@ -245,6 +245,24 @@ impl vicpilco_learn::record::LoopObserver for ClaimsAfterEachUpdate {
     }
 }
 
+/// Whether the run directory was locked (by another open file: the run's own lock) at the
+/// first update the loop ran.
+struct LockSeenDuringRun {
+    dir: std::path::PathBuf,
+    busy: Option<bool>,
+}
+
+impl vicpilco_learn::record::LoopObserver for LockSeenDuringRun {
+    fn phase(&mut self, _episode: usize, _phase: vicpilco_learn::record::Phase) {
+        if self.busy.is_none() {
+            let lock = self.dir.join(vicpilco_experiments::record::LOCK_FILE);
+            let file = std::fs::OpenOptions::new().write(true).open(lock).unwrap();
+            let busy = matches!(file.try_lock(), Err(std::fs::TryLockError::WouldBlock));
+            self.busy = Some(busy);
+        }
+    }
+}
+
 /// `vicpilco run vil-gic --quick`: three short policy updates on the arm write every file; a
 /// run stopped after update 1 and resumed ends with the same files, timings excepted.
 #[test]
@@ -444,6 +462,22 @@ fn replaying_a_run_keeps_its_updates_while_the_rules_agree(
     for file in ["rollouts.jsonl", "predictions.jsonl", "policies.jsonl"] {
         assert!(read(&full.join(file)) == read(&same.join(file)), "{file}");
     }
+
+    // A replay that goes on past the recorded updates runs in the directory it made, holding
+    // its lock as any run does (a resume beside it is refused).
+    let longer = base.join("replayed-longer");
+    let mut probe = LockSeenDuringRun {
+        dir: longer.clone(),
+        busy: None,
+    };
+    let opts_longer = RunOptions {
+        replay_from: Some(full.to_path_buf()),
+        ..opts(&longer, Some(4), false)
+    };
+    let summary = run("vil-gic", &opts_longer, &mut probe).expect("replay and one more update");
+    assert_eq!(summary.episodes.len(), 4);
+    assert_eq!(summary.replayed_from.as_ref().unwrap().agreed, 3);
+    assert_eq!(probe.busy, Some(true), "the replaying run holds its lock");
 
     // The state score: kept updates carry its scores, and from the first update where it
     // parts from the recorded choice the run is its own.
