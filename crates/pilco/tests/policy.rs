@@ -137,3 +137,46 @@ fn rbf_log_lengthscales_of_the_wrong_shape_are_refused_naming_log_ls() {
     let log_ls = Mat::<f64>::zeros(d, e);
     assert!(RbfPolicy::new(centres, targets, log_ls.as_ref(), 100.0).is_ok());
 }
+
+/// The forward pass returns a `Result`, so an input of the wrong size is an error naming the
+/// block (it used to panic), for the linear policy as for the RBF policy.
+#[test]
+fn policy_forward_refuses_an_input_of_the_wrong_size_with_an_error() {
+    use vicpilco_pilco::policy::RbfPolicy;
+    let linear = LinearPolicy::zeros(2, 1);
+    let centres = Mat::from_fn(3, 2, |i, c| (i + c) as f64);
+    let rbf = RbfPolicy::new(
+        centres,
+        Mat::zeros(3, 1),
+        Mat::<f64>::zeros(2, 1).as_ref(),
+        100.0,
+    )
+    .unwrap();
+    let s1 = Mat::from_fn(1, 1, |_, _| 0.1);
+    let s2 = Mat::from_fn(2, 2, |i, j| if i == j { 0.1 } else { 0.0 });
+    let s3 = Mat::from_fn(3, 3, |i, j| if i == j { 0.1 } else { 0.0 });
+    for (m, s) in [
+        (&[0.0][..], s1.as_ref()),
+        (&[0.0, 0.0, 0.0][..], s3.as_ref()),
+        (&[0.0, 0.0][..], s1.as_ref()),
+    ] {
+        let err = linear.forward(m, s).expect_err("refused").to_string();
+        assert!(err.contains("linear policy input"), "{err}");
+        assert!(rbf.forward(m, s).is_err());
+    }
+    assert!(linear.forward(&[0.0, 0.0], s2.as_ref()).is_ok());
+}
+
+/// `action` cannot return an error; an input of the wrong length stops it with a message
+/// instead of dropping the extra entries (as the RBF policy's does).
+#[test]
+#[should_panic(expected = "linear policy action: input of length 3, expected 2")]
+fn linear_policy_action_refuses_extra_entries() {
+    LinearPolicy::zeros(2, 1).action(&[0.0, 0.0, 5.0]);
+}
+
+#[test]
+#[should_panic(expected = "linear policy action: input of length 1, expected 2")]
+fn linear_policy_action_refuses_a_short_input() {
+    LinearPolicy::zeros(2, 1).action(&[0.0]);
+}

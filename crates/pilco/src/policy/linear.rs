@@ -10,7 +10,7 @@
 
 use super::Policy;
 use crate::error::{check_finite, check_len, PilcoError, Result};
-use crate::util::{assert_input, symmetrise};
+use crate::util::{check_input, symmetrise};
 use crate::{GaussianBar, Moments, MomentsBar};
 use faer::{Mat, MatRef};
 
@@ -116,7 +116,7 @@ impl Policy for LinearPolicy {
 
     fn forward(&self, m: &[f64], s: MatRef<'_, f64>) -> Result<(Moments, LinearCache)> {
         let (e, d) = (self.w.nrows(), self.w.ncols());
-        assert_input("linear policy", d, m, s);
+        check_input("linear policy", d, m, s)?;
         let w = &self.w;
         let mean = (0..e)
             .map(|i| self.b[i] + (0..d).map(|j| w[(i, j)] * m[j]).sum::<f64>())
@@ -161,8 +161,15 @@ impl Policy for LinearPolicy {
         out
     }
 
+    /// Panics when `x` is not of length [`Policy::n_inputs`], as [`super::RbfPolicy`]'s does:
+    /// extra entries would be silently dropped and a short input read out of bounds.
     fn action(&self, x: &[f64]) -> Vec<f64> {
         let (e, d) = (self.w.nrows(), self.w.ncols());
+        assert!(
+            x.len() == d,
+            "linear policy action: input of length {}, expected {d}",
+            x.len()
+        );
         (0..e)
             .map(|i| self.b[i] + (0..d).map(|j| self.w[(i, j)] * x[j]).sum::<f64>())
             .collect()

@@ -60,7 +60,8 @@ pub trait Policy {
     fn set_params(&mut self, p: &[f64]) -> Result<()>;
 
     /// Mean `M` (E), covariance `S` (E×E) and `V = s⁻¹Cov[x, u]` (D×E) of the action for
-    /// `x ~ N(m, s)`, and the cache for the backward.
+    /// `x ~ N(m, s)`, and the cache for the backward. An `m` or `s` not of D entries is an
+    /// error, not a panic.
     fn forward(&self, m: &[f64], s: MatRef<'_, f64>) -> Result<(Moments, Self::Cache)>;
 
     /// Vector-Jacobian product. Given the adjoints of `(M, S, V)` (`bar.v` is `V̄`), **add**
@@ -68,7 +69,9 @@ pub trait Policy {
     /// of `(m, s)` (`s̄` symmetrised, see the crate docs).
     fn backward(&self, cache: &Self::Cache, bar: &MomentsBar, p_bar: &mut [f64]) -> GaussianBar;
 
-    /// The deterministic (unsquashed) action for a known input `x`.
+    /// The deterministic (unsquashed) action for a known input `x`. Panics unless `x` has
+    /// length [`Policy::n_inputs`]: this cannot fail otherwise, and its caller (the learning
+    /// loop's `act`) builds `x` from a layout checked against the policy before a run.
     fn action(&self, x: &[f64]) -> Vec<f64>;
 
     /// A typical size of each parameter (same order as [`Policy::params`]), for an optimiser
