@@ -139,7 +139,7 @@ pub struct MmCache {
 /// Moment matching: the moments of `f(x)` for `x ~ N(m, s)`.
 pub fn forward(model: &MmModel<'_>, m: &[f64], s: MatRef<'_, f64>) -> Result<(Moments, MmCache)> {
     let (n, d, e) = (model.centres.nrows(), model.input_dim(), model.output_dim());
-    check_moment_input(m, s, d)?;
+    check_moment_input(model, m, s)?;
     let nu = Mat::from_fn(n, d, |i, k| model.centres[(i, k)] - m[k]);
 
     let mut outputs = Vec::with_capacity(e);

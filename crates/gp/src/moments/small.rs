@@ -1,5 +1,6 @@
 //! Small dense helpers (D×D and N×D blocks) shared by the forward and backward passes.
 
+use super::forward::{MmModel, Variance};
 use crate::error::{GpError, Result};
 use crate::linalg::Chol;
 use faer::linalg::matmul::matmul;
@@ -79,7 +80,51 @@ pub(crate) fn mat_vec(a: MatRef<'_, f64>, v: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-pub(crate) fn check_moment_input(m: &[f64], s: MatRef<'_, f64>, d: usize) -> Result<()> {
+/// The entry check of [`super::forward`], once per call: the model's parts agree in shape
+/// (its fields are public, so a hand-built one may not) and the input fits it.
+pub(crate) fn check_moment_input(model: &MmModel<'_>, m: &[f64], s: MatRef<'_, f64>) -> Result<()> {
+    let (n, d, e) = (model.centres.nrows(), model.input_dim(), model.output_dim());
+    let shape = |what: String, expected: String, got: String| {
+        Err(GpError::Shape {
+            what,
+            expected,
+            got,
+        })
+    };
+    if (model.beta.nrows(), model.beta.ncols()) != (n, e) {
+        return shape(
+            "moment-matching model β".into(),
+            format!("{n}×{e} (one row per centre, one column per output)"),
+            format!("{}×{}", model.beta.nrows(), model.beta.ncols()),
+        );
+    }
+    if let Some((a, h)) = model.hyp.iter().enumerate().find(|(_, h)| h.dim() != d) {
+        return shape(
+            format!("moment-matching model hyp[{a}].log_ls"),
+            format!("length {d} (one per centre column)"),
+            format!("length {}", h.dim()),
+        );
+    }
+    if let Variance::Model(w) = model.variance {
+        if w.len() != e {
+            return shape(
+                "moment-matching model W".into(),
+                format!("{e} matrices (one per output)"),
+                format!("{}", w.len()),
+            );
+        }
+        if let Some((a, wa)) = w
+            .iter()
+            .enumerate()
+            .find(|(_, wa)| (wa.nrows(), wa.ncols()) != (n, n))
+        {
+            return shape(
+                format!("moment-matching model W[{a}]"),
+                format!("{n}×{n} (one row and column per centre)"),
+                format!("{}×{}", wa.nrows(), wa.ncols()),
+            );
+        }
+    }
     if m.len() != d || s.nrows() != d || s.ncols() != d {
         return Err(GpError::Shape {
             what: "moment-matching input".into(),

@@ -355,3 +355,64 @@ fn a_negative_input_variance_is_named_with_its_index() {
     });
     assert!(forward(&mm, &[0.0, 0.0], s.as_ref()).is_ok());
 }
+
+/// `MmModel`'s fields are public, so a hand-built model whose parts disagree in shape is
+/// refused by `forward` with the part named, where it used to index out of bounds.
+#[test]
+fn a_hand_built_model_of_inconsistent_shapes_is_an_error_naming_the_part() {
+    let mut rng = Lcg(33);
+    let gp = random_gp(&mut rng, 10, 3, 2);
+    let short = [
+        Hyper {
+            log_ls: vec![0.0],
+            log_sf: 0.0,
+            log_sn: -2.0,
+        },
+        gp.hyp()[1].clone(),
+    ];
+    let beta = Mat::<f64>::zeros(9, 2);
+    let w_wrong = [gp.inv_k()[0].clone(), Mat::<f64>::zeros(10, 9)];
+    let w_one = [gp.inv_k()[0].clone()];
+    let good = MmModel::with_uncertainty(&gp);
+    let cases = [
+        (
+            "hyp[0].log_ls",
+            MmModel {
+                hyp: &short,
+                ..good
+            },
+        ),
+        (
+            "β",
+            MmModel {
+                beta: beta.as_ref(),
+                ..good
+            },
+        ),
+        (
+            "W[1]",
+            MmModel {
+                variance: Variance::Model(&w_wrong),
+                ..good
+            },
+        ),
+        (
+            "W",
+            MmModel {
+                variance: Variance::Model(&w_one),
+                ..good
+            },
+        ),
+    ];
+    let s = Mat::from_fn(3, 3, |i, j| if i == j { 0.1 } else { 0.0 });
+    for (part, mm) in cases {
+        let msg = forward(&mm, &[0.0; 3], s.as_ref())
+            .expect_err(part)
+            .to_string();
+        assert!(
+            msg.starts_with(&format!("moment-matching model {part}: expected")),
+            "{part}: {msg}"
+        );
+    }
+    assert!(forward(&good, &[0.0; 3], s.as_ref()).is_ok());
+}
