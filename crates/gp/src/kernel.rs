@@ -11,6 +11,7 @@
 //! prediction go through the [`Kernel`] trait so that other stationary kernels (Matérn) can be
 //! added without touching their callers.
 
+use crate::error::{GpError, Result};
 use faer::{Mat, MatMut, MatRef};
 use serde::{Deserialize, Serialize};
 
@@ -26,14 +27,21 @@ pub struct Hyper {
 }
 
 impl Hyper {
-    /// From PILCO's column layout `[log ℓ_1..log ℓ_D, log σ_f, log σ_n]`.
-    pub fn from_pilco(col: &[f64]) -> Self {
-        let d = col.len() - 2;
-        Self {
+    /// From PILCO's column layout `[log ℓ_1..log ℓ_D, log σ_f, log σ_n]`; fewer than 2
+    /// entries is [`GpError::Shape`].
+    pub fn from_pilco(col: &[f64]) -> Result<Self> {
+        let Some(d) = col.len().checked_sub(2) else {
+            return Err(GpError::Shape {
+                what: "PILCO hyper-parameter column [log ℓ_1..log ℓ_D, log σ_f, log σ_n]".into(),
+                expected: "at least 2 entries (log σ_f and log σ_n)".into(),
+                got: format!("{} entries", col.len()),
+            });
+        };
+        Ok(Self {
             log_ls: col[..d].to_vec(),
             log_sf: col[d],
             log_sn: col[d + 1],
-        }
+        })
     }
 
     /// PILCO's column layout `[log ℓ_1..log ℓ_D, log σ_f, log σ_n]`.

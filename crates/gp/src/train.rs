@@ -223,7 +223,7 @@ fn objective(
     let mut e = nlml_with_kernel(&SquaredExponential, inputs, y, h, opts.jitter, ws)?;
     let plain = e.value;
     if let Some(curb) = &opts.penalty {
-        let (p, g) = curb.penalty(h, c);
+        let (p, g) = curb.penalty(h, c)?;
         e.value += p;
         e.grad.iter_mut().zip(&g).for_each(|(a, b)| *a += b);
     }
@@ -295,7 +295,7 @@ fn train_output(
     let mut max_jitter = 0.0f64;
     let mut initial_objective = None;
     let mut f = |x: &[f64]| -> Option<(f64, Vec<f64>)> {
-        let h = Hyper::from_pilco(x);
+        let h = Hyper::from_pilco(x).ok()?;
         let (e, _) = objective(inputs, y, &h, c, opts, &mut ws).ok()?;
         max_jitter = max_jitter.max(e.jitter);
         initial_objective.get_or_insert(e.value);
@@ -308,7 +308,7 @@ fn train_output(
             "objective is not finite at the start point".into(),
         ));
     };
-    let best = Hyper::from_pilco(&r.x);
+    let best = Hyper::from_pilco(&r.x)?;
     let (fin, plain) = objective(inputs, y, &best, c, opts, &mut ws)?;
     Ok((
         best,

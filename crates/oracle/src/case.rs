@@ -244,9 +244,12 @@ impl Case {
     /// [`Self::pilco_hyp`] as one [`Hyper`] per column (output).
     pub fn hypers(&self, name: &str) -> Result<Vec<Hyper>, OracleError> {
         let hyp = self.pilco_hyp(name)?;
-        Ok((0..hyp.ncols())
-            .map(|e| Hyper::from_pilco(&(0..hyp.nrows()).map(|r| hyp[(r, e)]).collect::<Vec<_>>()))
-            .collect())
+        (0..hyp.ncols())
+            .map(|e| {
+                Hyper::from_pilco(&(0..hyp.nrows()).map(|r| hyp[(r, e)]).collect::<Vec<_>>())
+                    .map_err(|err| self.bad(name, &err.to_string()))
+            })
+            .collect()
     }
 
     /// One output's PILCO hyper-parameter vector `name`: `[log ℓ_1..log ℓ_D, log σ_f,
@@ -254,7 +257,7 @@ impl Case {
     pub fn hyper(&self, name: &str) -> Result<Hyper, OracleError> {
         let col = self.vec(name)?;
         self.check_hyp_len(name, col.len())?;
-        Ok(Hyper::from_pilco(&col))
+        Hyper::from_pilco(&col).map_err(|err| self.bad(name, &err.to_string()))
     }
 
     /// The Gaussian input `m` (length `d`) and `s` (`d`×`d`) of a moment-matching case.

@@ -214,7 +214,7 @@ fn mean_gp_parameter_vjp_matches_finite_differences() {
             let targets = Mat::from_fn(n, e, |i, a| x[off + i * e + a]);
             let off = off + n * e;
             let hyp = (0..e)
-                .map(|a| Hyper::from_pilco(&x[off + a * (d + 2)..off + (a + 1) * (d + 2)]))
+                .map(|a| Hyper::from_pilco(&x[off + a * (d + 2)..off + (a + 1) * (d + 2)]).unwrap())
                 .collect();
             GpModel::new(inputs, targets, hyp).unwrap()
         };

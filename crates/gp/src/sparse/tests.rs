@@ -150,7 +150,7 @@ fn fitc_gradients_match_finite_differences() {
         // w.r.t. the log hyper-parameters.
         let mut fh = |p: &[f64]| {
             vec![
-                fitc_nlml(x.as_ref(), &y, &Hyper::from_pilco(p), u.as_ref())
+                fitc_nlml(x.as_ref(), &y, &Hyper::from_pilco(p).unwrap(), u.as_ref())
                     .unwrap()
                     .value,
             ]

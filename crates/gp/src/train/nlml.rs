@@ -60,9 +60,17 @@ impl Default for HypCurb {
 }
 
 impl HypCurb {
-    /// Penalty value and gradient (PILCO order) for `hyp`, with `input_std` = c_d.
-    pub fn penalty(&self, hyp: &Hyper, input_std: &[f64]) -> (f64, Vec<f64>) {
+    /// Penalty value and gradient (PILCO order) for `hyp`, with `input_std` = c_d, one per
+    /// length-scale ([`GpError::Shape`] otherwise).
+    pub fn penalty(&self, hyp: &Hyper, input_std: &[f64]) -> Result<(f64, Vec<f64>)> {
         let d = hyp.dim();
+        if input_std.len() != d {
+            return Err(GpError::Shape {
+                what: "hypCurb input_std (c_d)".into(),
+                expected: format!("length {d} (one per length-scale)"),
+                got: format!("length {}", input_std.len()),
+            });
+        }
         let p = self.power;
         let pf = f64::from(p);
         let mut value = 0.0;
@@ -79,7 +87,7 @@ impl HypCurb {
         let g = pf * z.powi(p - 1) / lsnr;
         grad[d] = g;
         grad[d + 1] = -g;
-        (value, grad)
+        Ok((value, grad))
     }
 }
 
@@ -139,7 +147,7 @@ pub fn nlml_curb(
     curb: &HypCurb,
 ) -> Result<NlmlEval> {
     let mut e = nlml(inputs, y, hyp)?;
-    let (p, g) = curb.penalty(hyp, &input_std(inputs));
+    let (p, g) = curb.penalty(hyp, &input_std(inputs))?;
     e.value += p;
     e.grad.iter_mut().zip(&g).for_each(|(a, b)| *a += b);
     Ok(e)

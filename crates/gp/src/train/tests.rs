@@ -64,7 +64,7 @@ fn nlml_gradient_matches_finite_differences() {
         let (x, y) = data(n, d, n as u64 * 31 + d as u64);
         let h = random_hyp(d, &mut rng);
         let mut f = |p: &[f64]| {
-            let e = nlml(x.as_ref(), &y, &Hyper::from_pilco(p)).unwrap();
+            let e = nlml(x.as_ref(), &y, &Hyper::from_pilco(p).unwrap()).unwrap();
             (e.value, e.grad)
         };
         check_gradient(&mut f, &h.to_pilco(), 1e-4, 1e-7);
@@ -86,16 +86,16 @@ fn penalised_gradient_matches_finite_differences_also_where_the_penalty_is_large
                 h.log_sf = 2.0;
                 h.log_sn = -5.5;
             }
-            let (pen, _) = curb.penalty(&h, &c);
+            let (pen, _) = curb.penalty(&h, &c).unwrap();
             assert!(!extreme || pen > 10.0, "penalty {pen} should be large");
             // The penalty alone.
-            let mut fp = |p: &[f64]| curb.penalty(&Hyper::from_pilco(p), &c);
+            let mut fp = |p: &[f64]| curb.penalty(&Hyper::from_pilco(p).unwrap(), &c).unwrap();
             check_gradient(&mut fp, &h.to_pilco(), 1e-4, 1e-7);
             // nlml + penalty. At the extreme point K + σ_n²I has condition ~1e8, which puts
             // ~1e-8 relative noise on the value (measured: the 5-point difference moves by
             // ~1e-5 between steps 1e-4 and 1e-5), so it is checked more loosely there.
             let mut f = |p: &[f64]| {
-                let e = nlml_curb(x.as_ref(), &y, &Hyper::from_pilco(p), &curb).unwrap();
+                let e = nlml_curb(x.as_ref(), &y, &Hyper::from_pilco(p).unwrap(), &curb).unwrap();
                 (e.value, e.grad)
             };
             let (step, tol) = if extreme { (1e-3, 2e-5) } else { (1e-4, 1e-7) };
@@ -319,7 +319,7 @@ fn floor_penalty_gradient_matches_finite_differences_and_leaves_free_inputs_alon
     assert!((value - z0.powi(30) - 1.0).abs() <= 1e-12 * value);
     assert!(grad[0] < 0.0 && grad[1] < 0.0);
     assert_eq!(&grad[2..], &[0.0; 4]);
-    let mut f = |p: &[f64]| floor_penalty(&Hyper::from_pilco(p), &floor);
+    let mut f = |p: &[f64]| floor_penalty(&Hyper::from_pilco(p).unwrap(), &floor);
     check_gradient(&mut f, &h.to_pilco(), 1e-4, 1e-6);
     // A third of the floor is a wall.
     h.log_ls[0] = (0.1f64).ln();
@@ -335,7 +335,10 @@ fn assert_objective_is_penalised_nlml(
     extra: f64,
 ) {
     let plain = nlml(x.as_ref(), y, held).unwrap().value;
-    let curb = HypCurb::default().penalty(held, &input_std(x.as_ref())).0;
+    let curb = HypCurb::default()
+        .penalty(held, &input_std(x.as_ref()))
+        .unwrap()
+        .0;
     let o = &rep.outputs[0];
     assert!((o.objective - (plain + curb + extra)).abs() < 1e-9 * o.objective.abs().max(1.0));
 }
@@ -387,7 +390,7 @@ fn ceiling_penalty_mirrors_the_floor_and_matches_finite_differences() {
     assert!((value - z0.powi(30) - 1.0).abs() <= 1e-12 * value);
     assert!(grad[0] > 0.0 && grad[1] > 0.0);
     assert_eq!(&grad[2..], &[0.0; 4]);
-    let mut f = |p: &[f64]| ceiling_penalty(&Hyper::from_pilco(p), &ceiling);
+    let mut f = |p: &[f64]| ceiling_penalty(&Hyper::from_pilco(p).unwrap(), &ceiling);
     check_gradient(&mut f, &h.to_pilco(), 1e-4, 1e-6);
     // The ceiling is the floor reflected through the bound: ℓ = c·r costs what ℓ = c/r does.
     let mut below = h.clone();
@@ -452,4 +455,29 @@ fn nlml_names_a_nan_in_its_data_as_train_does() {
         matches!(&err, GpError::NonFinite { what, row: 6, col: 0, .. } if what == "GP training targets"),
         "{err:?}"
     );
+}
+
+/// `Hyper::from_pilco` of fewer than 2 entries used to underflow `len − 2` and index out of
+/// bounds; `HypCurb::penalty` with fewer c_d than length-scales indexed out of bounds. Both
+/// are public and take the caller's numbers, so both are errors naming what is wrong.
+#[test]
+fn hyper_columns_and_penalty_scales_of_the_wrong_length_are_errors() {
+    for col in [&[][..], &[0.5][..]] {
+        let msg = Hyper::from_pilco(col).unwrap_err().to_string();
+        assert!(msg.contains("PILCO hyper-parameter column"), "{msg}");
+        assert!(msg.contains(&format!("got {} entries", col.len())), "{msg}");
+    }
+    let h = Hyper::from_pilco(&[0.1, 0.2, 0.3, -2.0]).unwrap();
+    assert_eq!((h.log_ls, h.log_sf, h.log_sn), (vec![0.1, 0.2], 0.3, -2.0));
+
+    let h = Hyper::from_pilco(&[0.1, 0.2, 0.3, -2.0]).unwrap();
+    let curb = HypCurb::default();
+    for c in [&[1.0][..], &[1.0, 1.0, 1.0][..]] {
+        let msg = curb.penalty(&h, c).unwrap_err().to_string();
+        assert!(
+            msg.starts_with("hypCurb input_std (c_d): expected length 2"),
+            "{msg}"
+        );
+    }
+    assert!(curb.penalty(&h, &[1.0, 2.0]).is_ok());
 }

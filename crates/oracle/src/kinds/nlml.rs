@@ -27,7 +27,7 @@ impl KindChecker for Nlml {
         let plain = nlml(inputs.as_ref(), &targets, &hyp).map_err(refused)?;
         // c_d is recomputed from the inputs (and compared), not read from the file.
         let std = input_std(inputs.as_ref());
-        let (pen, dpen) = curb.penalty(&hyp, &std);
+        let (pen, dpen) = curb.penalty(&hyp, &std).map_err(refused)?;
         let curbed: Vec<f64> = plain.grad.iter().zip(&dpen).map(|(a, b)| a + b).collect();
 
         let tol = Tolerance::for_case(&case.kind, &case.name);
