@@ -156,6 +156,12 @@ fn fitc_gradients_match_finite_differences() {
             ]
         };
         let j = fd::jacobian(&mut fh, &h.to_pilco(), 1e-4);
+        // zip stops at the shorter: a gradient missing entries would pass unchecked.
+        assert_eq!(
+            g.grad_hyp.len(),
+            j[0].len(),
+            "hyper-parameter gradient length"
+        );
         for (k, (a, b)) in g.grad_hyp.iter().zip(&j[0]).enumerate() {
             assert!(
                 fd::rel_diff(*a, *b, 1e-2) < 1e-6,

@@ -48,6 +48,8 @@ pub(crate) fn check_gradient(f: &mut ValueGrad<'_>, x: &[f64], step: f64, tol: f
     let (_, g) = f(x);
     let mut value = |p: &[f64]| vec![f(p).0];
     let j = fd::jacobian(&mut value, x, step);
+    // zip stops at the shorter: a gradient missing entries would pass unchecked.
+    assert_eq!(g.len(), x.len(), "analytic gradient length");
     for (k, (a, b)) in g.iter().zip(&j[0]).enumerate() {
         let r = fd::rel_diff(*a, *b, 1e-3);
         assert!(
@@ -55,6 +57,14 @@ pub(crate) fn check_gradient(f: &mut ValueGrad<'_>, x: &[f64], step: f64, tol: f
             "component {k}: analytic {a}, finite difference {b}, rel {r:e}"
         );
     }
+}
+
+#[test]
+#[should_panic(expected = "analytic gradient length")]
+fn check_gradient_refuses_a_gradient_with_entries_missing() {
+    // Right in the entries it has (f = x0² + x1², ∇f = (2x0, 2x1)), but one short.
+    let mut f = |p: &[f64]| (p[0] * p[0] + p[1] * p[1], vec![2.0 * p[0]]);
+    check_gradient(&mut f, &[0.3, -0.7], 1e-4, 1e-7);
 }
 
 #[test]
