@@ -53,8 +53,9 @@ pub struct Step {
     pub done: bool,
 }
 
-/// Diagnostics of one step. Simulators fill in the true state; a real robot may leave it equal
-/// to the observation.
+/// Diagnostics of one step. Simulators fill in the true state; a real robot, which has no
+/// noise-free state, sets it equal to the observation (the learning loop refuses one that is
+/// not `state_dim` long, the default empty one included).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StepInfo {
     /// System time at the end of the step, seconds since reset.

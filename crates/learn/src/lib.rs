@@ -124,8 +124,9 @@ pub enum LearnError {
     /// A policy, squashing or cost block rejected its definition, input or parameters.
     #[error(transparent)]
     Pilco(#[from] vicpilco_pilco::PilcoError),
-    /// The system refused a reset or a step, or returned a non-finite observation or true
-    /// state; the text is its error, prefixed `step t:` (0-based) for a step.
+    /// The system refused a reset or a step, or returned an observation or true state that is
+    /// non-finite or not `state_dim` long; the text is its error, prefixed `step t:` (0-based)
+    /// for a step.
     #[error("system: {0}")]
     Env(String),
 }

@@ -198,46 +198,98 @@ fn each_update_evaluates_its_start_point_once() {
     }
 }
 
+/// The integrator with each step's result damaged by `spoil(step, t)` (t counted from 1).
+struct Spoilt {
+    inner: Integrator,
+    spoil: fn(&mut Step, usize),
+}
+
+impl Environment for Spoilt {
+    fn state_dim(&self) -> usize {
+        self.inner.state_dim()
+    }
+    fn action_dim(&self) -> usize {
+        self.inner.action_dim()
+    }
+    fn dt(&self) -> f64 {
+        self.inner.dt()
+    }
+    fn horizon(&self) -> usize {
+        self.inner.horizon()
+    }
+    fn state_names(&self) -> Vec<String> {
+        self.inner.state_names()
+    }
+    fn action_names(&self) -> Vec<String> {
+        self.inner.action_names()
+    }
+    fn reset(&mut self, start: &[f64], seed: u64) -> Result<Vec<f64>, EnvError> {
+        self.inner.reset(start, seed)
+    }
+    fn step(&mut self, action: &[f64]) -> Result<Step, EnvError> {
+        let mut s = self.inner.step(action)?;
+        (self.spoil)(&mut s, self.inner.t);
+        Ok(s)
+    }
+}
+
 /// A system that returns a NaN is stopped there with an error naming the step and entry, not
 /// carried into the recorded return and the summary.
 #[test]
 fn a_non_finite_state_from_the_system_is_an_error_naming_the_step() {
-    struct NanAtStep3(Integrator);
-    impl Environment for NanAtStep3 {
-        fn state_dim(&self) -> usize {
-            self.0.state_dim()
-        }
-        fn action_dim(&self) -> usize {
-            self.0.action_dim()
-        }
-        fn dt(&self) -> f64 {
-            self.0.dt()
-        }
-        fn horizon(&self) -> usize {
-            self.0.horizon()
-        }
-        fn state_names(&self) -> Vec<String> {
-            self.0.state_names()
-        }
-        fn action_names(&self) -> Vec<String> {
-            self.0.action_names()
-        }
-        fn reset(&mut self, start: &[f64], seed: u64) -> Result<Vec<f64>, EnvError> {
-            self.0.reset(start, seed)
-        }
-        fn step(&mut self, action: &[f64]) -> Result<Step, EnvError> {
-            let mut s = self.0.step(action)?;
-            if self.0.t == 3 {
+    let mut env = Spoilt {
+        inner: Integrator::default(),
+        spoil: |s, t| {
+            if t == 3 {
                 s.info.true_state[0] = f64::NAN;
             }
-            Ok(s)
-        }
-    }
-    let mut env = NanAtStep3(Integrator::default());
+        },
+    };
     let err = setup(1, 1).run(&mut env, &mut ()).err().expect("refused");
     assert!(
         matches!(&err, LearnError::Env(msg)
             if msg == "step 2: the true state has a non-finite entry 0 (NaN)"),
         "{err}"
     );
+}
+
+/// An observation or true state of the wrong length (a system that leaves `info.true_state`
+/// at its empty default) is stopped at the step with an error, where it used to panic later in
+/// the recorded cost, the training set or the policy's action.
+#[test]
+fn a_state_of_the_wrong_length_from_the_system_is_an_error_naming_the_step() {
+    type Spoil = fn(&mut Step, usize);
+    let cases: [(Spoil, &str); 3] = [
+        (
+            |s, _| s.info.true_state.clear(),
+            "step 0: the true state has 0 entries, the system's state_dim is 1",
+        ),
+        (
+            |s, t| {
+                if t == 2 {
+                    s.observation.clear()
+                }
+            },
+            "step 1: the observation has 0 entries, the system's state_dim is 1",
+        ),
+        (
+            |s, t| {
+                if t == 4 {
+                    s.observation.push(0.0)
+                }
+            },
+            "step 3: the observation has 2 entries, the system's state_dim is 1",
+        ),
+    ];
+    for (spoil, want) in cases {
+        let mut env = Spoilt {
+            inner: Integrator::default(),
+            spoil,
+        };
+        let err = setup(1, 1).run(&mut env, &mut ()).err().expect("refused");
+        assert!(
+            matches!(&err, LearnError::Env(msg) if msg == want),
+            "{want}: {err}"
+        );
+    }
 }

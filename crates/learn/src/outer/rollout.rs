@@ -22,26 +22,38 @@ pub(super) const PURPOSE_EXPLORE: u64 = 3;
 pub(super) const PURPOSE_EXTRA_ROLLOUT: u64 = 100;
 
 /// Run one episode on the system with `act(t, observation) → action`, until the horizon or
-/// until the system ends it (logged as a warning with the system's reason).
+/// until the system ends it (logged as a warning with the system's reason). Fails with
+/// [`LearnError::Env`] when the system refuses a reset or step, or returns an observation or
+/// true state that is not `state_dim` finite numbers.
 pub fn rollout(
     env: &mut dyn Environment,
     start: &[f64],
     seed: u64,
     mut act: impl FnMut(usize, &[f64]) -> Result<Vec<f64>, LearnError>,
 ) -> Result<Rollout, LearnError> {
-    // A NaN from the system would travel silently into the recorded return, the model
-    // selection's scores and the summary; it is the system's error, named where it happened.
-    let finite = |at: &str, what: &str, v: &[f64]| match v.iter().position(|x| !x.is_finite()) {
-        Some(i) => Err(LearnError::Env(format!(
-            "{at}: the {what} has a non-finite entry {i} ({})",
-            v[i]
-        ))),
-        None => Ok(()),
+    // A NaN or a state of the wrong length from the system would travel silently into the
+    // recorded return, the model selection's scores and the summary, or panic in the cost or
+    // the training set after the roll-out; it is the system's error, named where it happened.
+    let d = env.state_dim();
+    let state = |at: &str, what: &str, v: &[f64]| {
+        if v.len() != d {
+            return Err(LearnError::Env(format!(
+                "{at}: the {what} has {} entries, the system's state_dim is {d}",
+                v.len()
+            )));
+        }
+        match v.iter().position(|x| !x.is_finite()) {
+            Some(i) => Err(LearnError::Env(format!(
+                "{at}: the {what} has a non-finite entry {i} ({})",
+                v[i]
+            ))),
+            None => Ok(()),
+        }
     };
     let first = env
         .reset(start, seed)
         .map_err(|e| LearnError::Env(e.to_string()))?;
-    finite("reset", "observation", &first)?;
+    state("reset", "observation", &first)?;
     let mut r = Rollout {
         observations: vec![first],
         actions: Vec::new(),
@@ -55,8 +67,10 @@ pub fn rollout(
             .step(&a)
             .map_err(|e| LearnError::Env(format!("step {t}: {e}")))?;
         let at = format!("step {t}");
-        finite(&at, "observation", &step.observation)?;
-        finite(&at, "true state", &step.info.true_state)?;
+        state(&at, "observation", &step.observation)?;
+        // `StepInfo` documents the true state in the observation's layout (a system without
+        // a noise-free one copies the observation), and the recorded costs read it.
+        state(&at, "true state", &step.info.true_state)?;
         r.actions.push(a);
         r.observations.push(step.observation);
         r.true_states.push(step.info.true_state.clone());
