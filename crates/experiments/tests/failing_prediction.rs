@@ -9,10 +9,11 @@ fn a_prediction_failing_at_the_start_policy_names_its_cause() {
     let (mut setup, mut env) =
         vicpilco_experiments::classic::setup(PendulumScenario::default(), 1).unwrap();
     setup.episodes = 1;
-    // A start mean that is not finite passes the loop's checks (the prediction's starts are
-    // the caller's business) and fails the first moment-matching step.
-    for (mean, _) in &mut setup.prediction_starts {
-        mean[0] = f64::NAN;
+    // A start covariance with a negative variance passes the loop's checks (sizes and
+    // finiteness; telling a covariance from an indefinite matrix is the prediction's
+    // business) and fails the first moment-matching step.
+    for (_, cov) in &mut setup.prediction_starts {
+        cov[(0, 0)] = -1.0;
     }
     let err = setup
         .run(&mut env, &mut ())
@@ -20,7 +21,7 @@ fn a_prediction_failing_at_the_start_policy_names_its_cause() {
         .expect("the optimisation cannot start")
         .to_string();
     assert!(
-        err.contains("moment-matching input mean") && err.contains("NaN at row 0"),
+        err.contains("moment-matching input covariance") && err.contains("negative variance"),
         "the error should name the prediction's own failure: {err}"
     );
 }

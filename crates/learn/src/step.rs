@@ -17,7 +17,7 @@
 
 use crate::joint::{Joint, JointBar};
 use crate::LearnError;
-use faer::Mat;
+use faer::{Mat, MatRef};
 use vicpilco_gp::moments::{self, MmCache, MmModel, MomentsAdjoint};
 use vicpilco_pilco::policy::Policy;
 use vicpilco_pilco::squash::{PartialSat, TrigAug};
@@ -182,6 +182,34 @@ pub(crate) fn check_prior_rows(shift: &[Vec<f64>], d0: usize) -> Result<(), Lear
     }
 }
 
+/// A Gaussian over the state, the input of a step or a start of the return: `d0` finite means
+/// and a `d0`×`d0` finite covariance. Fails with [`LearnError::Spec`] beginning with `what`.
+pub(crate) fn check_state_gaussian(
+    what: &str,
+    m: &[f64],
+    s: MatRef<'_, f64>,
+    d0: usize,
+) -> Result<(), LearnError> {
+    let bad = |detail: String| Err(LearnError::Spec(format!("{what}: {detail}")));
+    if m.len() != d0 || s.nrows() != d0 || s.ncols() != d0 {
+        return bad(format!(
+            "a mean of {} and a {}×{} covariance for {d0} states",
+            m.len(),
+            s.nrows(),
+            s.ncols()
+        ));
+    }
+    if let Some(i) = m.iter().position(|v| !v.is_finite()) {
+        return bad(format!("mean entry {i} is {}", m[i]));
+    }
+    for j in 0..d0 {
+        if let Some(i) = (0..d0).find(|&i| !s[(i, j)].is_finite()) {
+            return bad(format!("covariance entry ({i}, {j}) is {}", s[(i, j)]));
+        }
+    }
+    Ok(())
+}
+
 /// Everything a step needs: its shape, the policy (with optional squashing), the dynamics GP
 /// and the optional prior mean.
 pub struct Predictor<'a, P: Policy> {
@@ -328,8 +356,21 @@ fn store_c(mo: &Moments) -> Mat<f64> {
 }
 
 impl<P: Policy> Predictor<'_, P> {
-    /// Predict `x_{t+1}` from `x_t ~ N(m, s)` at step index `t` (time `t·Δt`).
+    /// Predict `x_{t+1}` from `x_t ~ N(m, s)` at step index `t` (time `t·Δt`). An `m` or `s`
+    /// that is not D0 finite numbers is [`LearnError::Spec`].
     pub fn step(&self, t: usize, m: &[f64], s: &Mat<f64>) -> Result<StepOut<P::Cache>, LearnError> {
+        check_state_gaussian("step input", m, s.as_ref(), self.spec.state_dim)?;
+        self.step_checked(t, m, s)
+    }
+
+    /// [`Self::step`] on an input known to fit: a start [`crate::value::value`] has checked,
+    /// or the output of the step before, so a horizon's steps are not checked again.
+    pub(crate) fn step_checked(
+        &self,
+        t: usize,
+        m: &[f64],
+        s: &Mat<f64>,
+    ) -> Result<StepOut<P::Cache>, LearnError> {
         let d0 = self.spec.state_dim;
         let mut joint = Joint::new(m.to_vec(), s.clone());
         let trig = match &self.trig {

@@ -9,7 +9,7 @@
 //! costs a small constant times a value, whatever the number of policy parameters.
 
 use crate::joint::{Joint, JointBar};
-use crate::step::{Predictor, StepTape};
+use crate::step::{check_state_gaussian, Predictor, StepTape};
 use crate::LearnError;
 use faer::Mat;
 use rayon::prelude::*;
@@ -40,6 +40,45 @@ pub struct ReturnSpec {
 }
 
 impl ReturnSpec {
+    /// Checks the costs against a state of `d0` entries and `actions` actions: the cost angles
+    /// index the state, the state cost takes the state with their sines and cosines appended,
+    /// the energy cost takes the actions. Fails with [`LearnError::Spec`] naming the field
+    /// (`ret.cost_angles`, `ret.state_cost`, `ret.energy`).
+    pub fn check(&self, d0: usize, actions: usize) -> Result<(), LearnError> {
+        let bad = |what: &str, detail: String| Err(LearnError::Spec(format!("{what}: {detail}")));
+        if let Some(&i) = self.cost_angles.iter().find(|&&i| i >= d0) {
+            return bad(
+                "ret.cost_angles",
+                format!("index {i} ≥ state dimension {d0}"),
+            );
+        }
+        let cost_width = d0 + 2 * self.cost_angles.len();
+        if let Some(c) = self
+            .state_cost
+            .as_ref()
+            .filter(|c| c.n_inputs() != cost_width)
+        {
+            return bad(
+                "ret.state_cost",
+                format!(
+                    "{} inputs, but the state with its cost angles has {cost_width}",
+                    c.n_inputs()
+                ),
+            );
+        }
+        if let Some((e, _)) = self
+            .energy
+            .as_ref()
+            .filter(|(e, _)| e.n_inputs() != actions)
+        {
+            return bad(
+                "ret.energy",
+                format!("{} inputs for {actions} actions", e.n_inputs()),
+            );
+        }
+        Ok(())
+    }
+
     /// The predicted return of the first start distribution as reported to users: the
     /// discounted sum of the weighted expected costs (energy included) and of the per-step cost
     /// standard deviations (an upper bound on the return's std, as PILCO plots it).
@@ -160,7 +199,7 @@ where
     let mut records = Vec::with_capacity(if with_grad { spec.horizon } else { 0 });
     let mut steps = Vec::with_capacity(spec.horizon);
     for t in 0..spec.horizon {
-        let out = pred.step(t, &m, &s)?;
+        let out = pred.step_checked(t, &m, &s)?;
         let disc = spec.gamma.powi(t as i32 + 1);
         let (cost_mean, cost_var, cost_cache) = match &spec.state_cost {
             Some(c) => {
@@ -255,7 +294,28 @@ where
     Ok((j, Some(p_bar), steps))
 }
 
+/// Checks start distributions of a state of `d0` entries: at least one, each with `d0`
+/// finite means and a `d0`×`d0` finite covariance. Fails with [`LearnError::Spec`] naming
+/// `what` (the caller's name for them) and the start.
+pub fn check_starts(
+    what: &str,
+    starts: &[(Vec<f64>, Mat<f64>)],
+    d0: usize,
+) -> Result<(), LearnError> {
+    if starts.is_empty() {
+        return Err(LearnError::Spec(format!(
+            "{what}: none given (at least one)"
+        )));
+    }
+    for (k, (m, s)) in starts.iter().enumerate() {
+        check_state_gaussian(&format!("{what}: start {k}"), m, s.as_ref(), d0)?;
+    }
+    Ok(())
+}
+
 /// Expected return (and optionally its gradient) averaged over the start distributions.
+/// Checks `spec` ([`ReturnSpec::check`]) and `starts` ([`check_starts`]) against `pred`'s
+/// state and actions first.
 pub fn value<P>(
     pred: &Predictor<'_, P>,
     spec: &ReturnSpec,
@@ -266,11 +326,9 @@ where
     P: Policy + Sync,
     P::Cache: Send,
 {
-    if starts.is_empty() {
-        return Err(LearnError::Spec(
-            "value needs at least one start distribution".into(),
-        ));
-    }
+    // Once per call, here at the entry: the horizon's steps then run unchecked.
+    spec.check(pred.spec.state_dim, pred.n_actions())?;
+    check_starts("starts", starts, pred.spec.state_dim)?;
     let results: Vec<_> = starts
         .par_iter()
         .map(|(m0, s0)| one_start(pred, spec, m0, s0, with_grad))

@@ -418,3 +418,95 @@ fn a_linear_prior_term_beyond_the_state_or_not_finite_is_refused() {
         assert!(err.contains("linear_prior") && err.contains(says), "{err}");
     }
 }
+
+/// `value` and `Predictor::step` check what they are given against the predictor's state and
+/// actions (the loop's `check_against` shares these checks), where a start or return of the
+/// wrong size used to panic inside the prediction.
+#[test]
+fn value_and_step_refuse_starts_and_costs_that_do_not_fit_naming_them() {
+    let mut rng = Rng::seed_from_u64(9);
+    let gp = random_gp(&mut rng, 10, 3, 2);
+    let spec = StepSpec {
+        state_dim: 2,
+        angles: vec![],
+        time_input: false,
+        policy_inputs: vec![0, 1],
+        dyn_inputs: vec![0, 1],
+        targets: vec![Target::Relative; 2],
+        linear_prior: vec![],
+        dt: 0.1,
+    };
+    let policy = LinearPolicy::zeros(2, 1);
+    let pred = Predictor::new(&spec, &policy, None, MmModel::with_uncertainty(&gp), None).unwrap();
+    let cost = |d: usize| CostSum::loss_sat(Mat::<f64>::identity(d, d).as_ref(), &vec![0.0; d]);
+    let ret = ReturnSpec {
+        state_cost: Some(cost(2).unwrap()),
+        cost_angles: vec![],
+        w_mean: 1.0,
+        w_std: 0.0,
+        energy: None,
+        gamma: 1.0,
+        horizon: 3,
+    };
+    let s1 = Mat::from_fn(1, 1, |_, _| 0.1);
+    let s2 = Mat::from_fn(2, 2, |i, j| if i == j { 0.1 } else { 0.0 });
+    let good = vec![(vec![0.0, 0.0], s2.clone())];
+    let spec_err = |r: Result<vicpilco_learn::value::ValueOut, vicpilco_learn::LearnError>| match r
+    {
+        Err(vicpilco_learn::LearnError::Spec(msg)) => msg,
+        Err(e) => panic!("not a set-up error: {e}"),
+        Ok(_) => panic!("accepted"),
+    };
+    let with = |f: fn(&mut ReturnSpec)| {
+        let mut r = ret.clone();
+        f(&mut r);
+        r
+    };
+    for (bad_ret, says) in [
+        (
+            with(|r| {
+                r.state_cost =
+                    Some(CostSum::loss_sat(Mat::<f64>::identity(3, 3).as_ref(), &[0.0; 3]).unwrap())
+            }),
+            "ret.state_cost: 3 inputs, but the state with its cost angles has 2",
+        ),
+        (
+            with(|r| r.cost_angles = vec![2]),
+            "ret.cost_angles: index 2 ≥ state dimension 2",
+        ),
+        (
+            with(|r| r.energy = Some((EnergyCost::new(&[1.0, 1.0], &[true, true]).unwrap(), 0.1))),
+            "ret.energy: 2 inputs for 1 actions",
+        ),
+    ] {
+        assert_eq!(spec_err(value(&pred, &bad_ret, &good, true)), says);
+    }
+    for (starts, says) in [
+        (
+            vec![(vec![0.0], s1.clone())],
+            "starts: start 0: a mean of 1 and a 1×1 covariance for 2 states",
+        ),
+        (
+            vec![good[0].clone(), (vec![0.0, 0.0], s1.clone())],
+            "starts: start 1: a mean of 2 and a 1×1 covariance for 2 states",
+        ),
+        (
+            vec![(vec![0.0, f64::NAN], s2.clone())],
+            "starts: start 0: mean entry 1 is NaN",
+        ),
+        (vec![], "starts: none given (at least one)"),
+    ] {
+        assert_eq!(spec_err(value(&pred, &ret, &starts, true)), says);
+    }
+    assert!(value(&pred, &ret, &good, true).is_ok());
+
+    let msg = match pred.step(0, &[0.0], &s1) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("a step from a 1-entry state was accepted"),
+    };
+    assert_eq!(
+        msg,
+        "prediction set-up: step input: a mean of 1 and a 1×1 covariance for 2 states"
+    );
+    assert!(pred.step(0, &[0.0, 0.0], &s2).is_ok());
+}

@@ -1,6 +1,7 @@
 //! The set-up's check against the system before the first reset.
 
 use super::LoopSetup;
+use crate::value::check_starts;
 use crate::LearnError;
 use vicpilco_env::Environment;
 use vicpilco_pilco::policy::Policy;
@@ -12,7 +13,7 @@ where
     /// Checks, before anything runs on the system, that the set-up's parts fit each other and
     /// `env`: the step layout against the policy and squashing, the state, action and horizon
     /// against the system's, the prior shift (H rows of D0 finite numbers), the prediction
-    /// starts (D0 means, D0×D0 covariances) and the return's costs (their input widths).
+    /// starts ([`check_starts`]) and the return's costs ([`crate::value::ReturnSpec::check`]).
     /// Without it a mismatch would surface as a panic deep in a prediction, or after a roll-out
     /// had already moved a real robot. Fails with [`LearnError::Spec`] naming the field.
     pub fn check_against(&self, env: &dyn Environment) -> Result<(), LearnError> {
@@ -65,54 +66,8 @@ where
             }
             crate::step::check_prior_rows(shift, d0)?;
         }
-        if self.prediction_starts.is_empty() {
-            return bad("prediction_starts", "none given (at least one)".into());
-        }
-        for (k, (m, cov)) in self.prediction_starts.iter().enumerate() {
-            if m.len() != d0 || cov.nrows() != d0 || cov.ncols() != d0 {
-                return bad(
-                    "prediction_starts",
-                    format!(
-                        "start {k} has a mean of {} and a {}×{} covariance for {d0} states",
-                        m.len(),
-                        cov.nrows(),
-                        cov.ncols()
-                    ),
-                );
-            }
-        }
-        if let Some(&i) = self.ret.cost_angles.iter().find(|&&i| i >= d0) {
-            return bad(
-                "ret.cost_angles",
-                format!("index {i} ≥ state dimension {d0}"),
-            );
-        }
-        let cost_width = d0 + 2 * self.ret.cost_angles.len();
-        if let Some(c) = self
-            .ret
-            .state_cost
-            .as_ref()
-            .filter(|c| c.n_inputs() != cost_width)
-        {
-            return bad(
-                "ret.state_cost",
-                format!(
-                    "{} inputs, but the state with its cost angles has {cost_width}",
-                    c.n_inputs()
-                ),
-            );
-        }
-        if let Some((e, _)) = self
-            .ret
-            .energy
-            .as_ref()
-            .filter(|(e, _)| e.n_inputs() != actions)
-        {
-            return bad(
-                "ret.energy",
-                format!("{} inputs for {actions} actions", e.n_inputs()),
-            );
-        }
+        check_starts("prediction_starts", &self.prediction_starts, d0)?;
+        self.ret.check(d0, actions)?;
         Ok(())
     }
 }
