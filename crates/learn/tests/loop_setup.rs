@@ -10,8 +10,9 @@ use vicpilco_learn::start::StartDistribution;
 use vicpilco_learn::step::{StepSpec, Target};
 use vicpilco_learn::value::ReturnSpec;
 use vicpilco_learn::LearnError;
-use vicpilco_pilco::cost::{CostSum, SaturatingCost};
+use vicpilco_pilco::cost::{CostSum, EnergyCost, SaturatingCost};
 use vicpilco_pilco::policy::LinearPolicy;
+use vicpilco_pilco::squash::{PartialSat, SatRange};
 
 /// A one-dimensional integrator `x' = x + a·dt` that counts how often it is used.
 #[derive(Default)]
@@ -133,7 +134,7 @@ fn no_initial_rollouts_before_an_update_is_refused_before_the_system_runs() {
 #[test]
 fn parts_that_do_not_fit_are_refused_before_the_system_runs() {
     type Spoil = fn(&mut LoopSetup<LinearPolicy>);
-    let cases: [(&str, Spoil); 7] = [
+    let cases: [(&str, Spoil); 12] = [
         ("prior_shift", |s| s.prior_shift = Some(vec![vec![0.0]; 4])),
         ("prior_shift", |s| {
             s.prior_shift = Some(vec![vec![0.0, 1.0]; 5])
@@ -145,6 +146,24 @@ fn parts_that_do_not_fit_are_refused_before_the_system_runs() {
         ("ret.horizon", |s| s.ret.horizon = 6),
         ("ret.cost_angles", |s| s.ret.cost_angles = vec![1]),
         ("policy_inputs", |s| s.spec.policy_inputs = vec![0, 0]),
+        ("ret.state_cost", |s| {
+            let w = Mat::<f64>::identity(2, 2);
+            s.ret.state_cost = Some(CostSum::loss_sat(w.as_ref(), &[0.0, 0.0]).unwrap())
+        }),
+        ("ret.energy", |s| {
+            let e = EnergyCost::new(&[1.0, 1.0], &[true, true]).unwrap();
+            s.ret.energy = Some((e, 0.1))
+        }),
+        ("squash", |s| {
+            let a_max = SatRange::Symmetric { a_max: 1.0 };
+            s.squash = Some(PartialSat::new(2, &[0, 1], &[a_max, a_max]).unwrap())
+        }),
+        ("spec.state_dim", |s| {
+            s.spec.state_dim = 2;
+            s.spec.targets = vec![Target::Relative; 2];
+        }),
+        // Two actions for a system with one.
+        ("spec.state_dim", |s| s.policy = LinearPolicy::zeros(1, 2)),
     ];
     for (field, spoil) in cases {
         let mut env = Integrator::default();
