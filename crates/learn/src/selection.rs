@@ -126,7 +126,11 @@ pub fn crps_return_score(mean: f64, std: f64, recorded: f64) -> f64 {
 /// marginal N(mean, var) (up to ½ log 2π per term), step `t` of `predicted` against
 /// `recorded[t + 1]` (`recorded[0]` is the start), over the steps both have. Standard
 /// deviations are floored at 1e-9 · max(|recorded|, 1) only to keep a zero variance finite.
-pub fn trajectory_score(predicted: &[PredictedStep], recorded: &[Vec<f64>]) -> f64 {
+/// A recorded state of another length than its predicted one is [`LearnError::Spec`].
+pub fn trajectory_score(
+    predicted: &[PredictedStep],
+    recorded: &[Vec<f64>],
+) -> Result<f64, LearnError> {
     summed_entry_score(predicted, recorded, |s, z| s.ln() + 0.5 * z * z)
 }
 
@@ -143,7 +147,10 @@ pub const ROBUST_SCORE_DEGREES_OF_FREEDOM: f64 = 4.0;
 /// grows with log |z|, not z², so a few unpredictable steps cannot decide between two
 /// models, while a model that is confidently wrong throughout (s → 0 at a fixed error)
 /// still scores without bound.
-pub fn robust_trajectory_score(predicted: &[PredictedStep], recorded: &[Vec<f64>]) -> f64 {
+pub fn robust_trajectory_score(
+    predicted: &[PredictedStep],
+    recorded: &[Vec<f64>],
+) -> Result<f64, LearnError> {
     let nu = ROBUST_SCORE_DEGREES_OF_FREEDOM;
     summed_entry_score(predicted, recorded, |s, z| {
         s.ln() + 0.5 * (nu + 1.0) * (z * z / nu).ln_1p()
@@ -165,7 +172,10 @@ pub const HUBER_SCORE_THRESHOLD: f64 = 5.0;
 /// every candidate). Continuous with a continuous slope at |z| = c; an entry's cost grows
 /// linearly, not quadratically, in its error beyond c, and a model that is confidently
 /// wrong throughout still scores without bound.
-pub fn huber_trajectory_score(predicted: &[PredictedStep], recorded: &[Vec<f64>]) -> f64 {
+pub fn huber_trajectory_score(
+    predicted: &[PredictedStep],
+    recorded: &[Vec<f64>],
+) -> Result<f64, LearnError> {
     let c = HUBER_SCORE_THRESHOLD;
     summed_entry_score(predicted, recorded, |s, z| {
         let a = z.abs();
@@ -181,13 +191,27 @@ pub fn huber_trajectory_score(predicted: &[PredictedStep], recorded: &[Vec<f64>]
 /// The sum of `entry(s, z)` over the steps and state entries of `predicted` (step `t`
 /// against `recorded[t + 1]`), s the predicted standard deviation (floored at
 /// 1e-9 · max(|recorded|, 1) only to keep a zero variance finite) and z the standardised
-/// error.
+/// error. A recorded state longer than its predicted one would index past the prediction, a
+/// shorter one score fewer entries than the other steps: both are [`LearnError::Spec`].
 fn summed_entry_score(
     predicted: &[PredictedStep],
     recorded: &[Vec<f64>],
     entry: impl Fn(f64, f64) -> f64,
-) -> f64 {
-    predicted
+) -> Result<f64, LearnError> {
+    let pairs = predicted.iter().zip(recorded.iter().skip(1));
+    if let Some((t, (p, x))) = pairs
+        .enumerate()
+        .find(|(_, (p, x))| p.mean.len() != x.len())
+    {
+        return Err(LearnError::Spec(format!(
+            "trajectory score: the recorded state after step {t} (recorded[{}]) has {} \
+             entries, its prediction {}",
+            t + 1,
+            x.len(),
+            p.mean.len()
+        )));
+    }
+    Ok(predicted
         .iter()
         .zip(recorded.iter().skip(1))
         .map(|(p, x)| {
@@ -199,7 +223,7 @@ fn summed_entry_score(
                 })
                 .sum::<f64>()
         })
-        .sum()
+        .sum())
 }
 
 /// One update's choice between the refitted and the previous hyper-parameters.
@@ -362,9 +386,9 @@ where
         let recorded_return = self.recorded_return(r);
         Ok([
             rollout_score(mean, std, recorded_return),
-            trajectory_score(predicted, &recorded),
-            robust_trajectory_score(predicted, &recorded),
-            huber_trajectory_score(predicted, &recorded),
+            trajectory_score(predicted, &recorded)?,
+            robust_trajectory_score(predicted, &recorded)?,
+            huber_trajectory_score(predicted, &recorded)?,
             crps_return_score(mean, std, recorded_return),
         ])
     }

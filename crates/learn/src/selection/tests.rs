@@ -58,11 +58,13 @@ fn trajectory_score_is_the_summed_gaussian_negative_log_density_of_the_later_sta
     let expected =
         term(0.4, 0.1, 0.5) + term(1.0, 0.2, 1.0) + term(0.7, 0.3, 0.7) + term(1.0, 0.1, 1.2);
     // The start state (9, 9) is not predicted and not scored.
-    assert!((trajectory_score(&predicted, &recorded) - expected).abs() < 1e-12);
+    assert!((trajectory_score(&predicted, &recorded).unwrap() - expected).abs() < 1e-12);
     // A roll-out that ended early is scored over the steps it has.
     assert!(
-        (trajectory_score(&predicted, &recorded[..2]) - term(0.4, 0.1, 0.5) - term(1.0, 0.2, 1.0))
-            .abs()
+        (trajectory_score(&predicted, &recorded[..2]).unwrap()
+            - term(0.4, 0.1, 0.5)
+            - term(1.0, 0.2, 1.0))
+        .abs()
             < 1e-12
     );
 }
@@ -82,12 +84,12 @@ fn predict_ramp(offset: f64, std: f64) -> Vec<PredictedStep> {
 #[test]
 fn trajectory_score_ranks_sharp_and_right_over_vague_over_sharp_and_wrong() {
     let (recorded, predict) = (ramp(), predict_ramp);
-    let sharp_right = trajectory_score(&predict(0.001, 0.01), &recorded);
-    let vague = trajectory_score(&predict(0.0, 1.0), &recorded);
-    let sharp_wrong = trajectory_score(&predict(0.2, 0.01), &recorded);
+    let sharp_right = trajectory_score(&predict(0.001, 0.01), &recorded).unwrap();
+    let vague = trajectory_score(&predict(0.0, 1.0), &recorded).unwrap();
+    let sharp_wrong = trajectory_score(&predict(0.2, 0.01), &recorded).unwrap();
     assert!(sharp_right < vague && vague < sharp_wrong);
     // A zero variance stays finite and is scored by its error.
-    let exact = trajectory_score(&predict(0.0, 0.0), &recorded);
+    let exact = trajectory_score(&predict(0.0, 0.0), &recorded).unwrap();
     assert!(exact.is_finite() && exact < sharp_right);
 }
 
@@ -111,7 +113,7 @@ fn robust_trajectory_score_is_the_summed_student_t_negative_log_density() {
     .iter()
     .map(|&(m, s, x)| -density(m, s, x).ln() + 0.375f64.ln())
     .sum::<f64>();
-    assert!((robust_trajectory_score(&predicted, &recorded) - expected).abs() < 1e-12);
+    assert!((robust_trajectory_score(&predicted, &recorded).unwrap() - expected).abs() < 1e-12);
 }
 
 #[test]
@@ -141,10 +143,18 @@ fn one_unpredictable_impulse_does_not_outweigh_a_trajectory_predicted_well() {
     let sharp = predict(0.002, 0.25);
     let wide = predict(0.02, 2.0);
     // The Gaussian score leaves the sharp model for the impulse alone ...
-    assert!(trajectory_score(&sharp, &recorded) > trajectory_score(&wide, &recorded));
+    assert!(
+        trajectory_score(&sharp, &recorded).unwrap() > trajectory_score(&wide, &recorded).unwrap()
+    );
     // ... the Student-t and Huber's keep it.
-    assert!(robust_trajectory_score(&sharp, &recorded) < robust_trajectory_score(&wide, &recorded));
-    assert!(huber_trajectory_score(&sharp, &recorded) < huber_trajectory_score(&wide, &recorded));
+    assert!(
+        robust_trajectory_score(&sharp, &recorded).unwrap()
+            < robust_trajectory_score(&wide, &recorded).unwrap()
+    );
+    assert!(
+        huber_trajectory_score(&sharp, &recorded).unwrap()
+            < huber_trajectory_score(&wide, &recorded).unwrap()
+    );
 }
 
 #[test]
@@ -157,15 +167,18 @@ fn huber_trajectory_score_is_the_gaussian_within_the_threshold_and_linear_beyond
         step(&[0.7, 1.0], &[0.3, 0.1]),
     ];
     assert!(
-        (huber_trajectory_score(&near, &recorded) - trajectory_score(&near, &recorded)).abs()
+        (huber_trajectory_score(&near, &recorded).unwrap()
+            - trajectory_score(&near, &recorded).unwrap())
+        .abs()
             < 1e-12
     );
     // An error of 60 standard deviations: ln s + c·60 − c²/2, not ln s + 1800.
     let far = vec![step(&[0.5, 1.0 - 60.0 * 0.1], &[1.0, 0.1])];
     let expected = 0.1f64.ln() + c * 60.0 - 0.5 * c * c;
-    assert!((huber_trajectory_score(&far, &recorded[..2]) - expected).abs() < 1e-9);
+    assert!((huber_trajectory_score(&far, &recorded[..2]).unwrap() - expected).abs() < 1e-9);
     // Continuous value and slope where the pieces meet, on either side of the mean.
-    let entry = |z: f64| huber_trajectory_score(&[step(&[z], &[1.0])], &[vec![0.0], vec![0.0]]);
+    let entry =
+        |z: f64| huber_trajectory_score(&[step(&[z], &[1.0])], &[vec![0.0], vec![0.0]]).unwrap();
     for side in [-1.0, 1.0] {
         let (below, above) = (entry(side * (c - 1e-7)), entry(side * (c + 1e-7)));
         assert!((below - above).abs() < 1e-5, "{below} vs {above}");
@@ -180,11 +193,44 @@ fn huber_trajectory_score_is_the_gaussian_within_the_threshold_and_linear_beyond
     }
 }
 
+/// A recorded state longer than the predicted one used to index past the prediction (a
+/// panic), a shorter one to score fewer entries than the other steps (silently); each score
+/// now refuses both, naming the step.
+#[test]
+fn recorded_states_of_another_length_than_the_prediction_are_errors_naming_the_step() {
+    let (predicted, recorded) = two_steps();
+    type Score = fn(&[PredictedStep], &[Vec<f64>]) -> Result<f64, crate::LearnError>;
+    let scores: [Score; 3] = [
+        trajectory_score,
+        robust_trajectory_score,
+        huber_trajectory_score,
+    ];
+    for score in scores {
+        for (row, x) in [(2, vec![0.7, 1.2, 3.0]), (1, vec![0.5])] {
+            let mut bad = recorded.clone();
+            bad[row] = x.clone();
+            let msg = score(&predicted, &bad).unwrap_err().to_string();
+            let want = format!(
+                "prediction set-up: trajectory score: the recorded state after step {} \
+                 (recorded[{row}]) has {} entries, its prediction 2",
+                row - 1,
+                x.len()
+            );
+            assert_eq!(msg, want);
+        }
+        // The start is not scored, so its length does not matter; fewer steps are allowed.
+        let mut other_start = recorded.clone();
+        other_start[0] = vec![];
+        assert!(score(&predicted, &other_start).is_ok());
+        assert!(score(&predicted, &recorded[..2]).is_ok());
+    }
+}
+
 #[test]
 fn the_bounded_scores_still_rank_sharp_and_right_over_vague_over_sharp_and_wrong() {
     let (recorded, predict) = (ramp(), predict_ramp);
     for bounded in [robust_trajectory_score, huber_trajectory_score] {
-        let score = |offset, std| bounded(&predict(offset, std), &recorded);
+        let score = |offset, std| bounded(&predict(offset, std), &recorded).unwrap();
         assert!(score(0.001, 0.01) < score(0.0, 1.0));
         assert!(score(0.0, 1.0) < score(0.2, 0.01));
         // Confidently wrong has no floor: shrinking the spread at a fixed error only costs.
