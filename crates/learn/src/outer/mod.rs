@@ -136,6 +136,22 @@ where
         value(&pred, &self.ret, starts, with_grad)
     }
 
+    /// The objective the policy optimiser sees, J and dJ/dq at its point `q = ψ / scales`:
+    /// `J(scales ⊙ q)` and `scales ⊙ dJ/dψ`, with `candidate`'s parameters set to ψ. The same
+    /// function of ψ whatever the scales; only the optimiser's steps change.
+    pub(crate) fn scaled_value(
+        &self,
+        candidate: &mut P,
+        model: MmModel<'_>,
+        scales: &[f64],
+        q: &[f64],
+    ) -> Result<(f64, Vec<f64>), LearnError> {
+        candidate.set_params(&unscale(q, scales))?;
+        let out = self.predicted_value(candidate, model, true)?;
+        let grad = out.grad.expect("value was asked for its gradient");
+        Ok((out.j, grad.iter().zip(scales).map(|(g, s)| g * s).collect()))
+    }
+
     /// The deterministic action of `policy` at a known observation.
     pub fn act(&self, policy: &P, trig: Option<&TrigAug>, t: usize, obs: &[f64]) -> Vec<f64> {
         let aug = augment(&self.spec, trig, obs, t);
@@ -372,28 +388,20 @@ where
                 Some(rule) => base.param_scales(rule),
                 None => vec![1.0; base.n_params()],
             };
-            // The optimiser sees q = ψ / scale: J(q) = J(scale ⊙ q), dJ/dq = scale ⊙ dJ/dψ.
-            let unscale =
-                |q: &[f64]| -> Vec<f64> { q.iter().zip(&scales).map(|(q, s)| q * s).collect() };
             // A point the prediction fails at is one the line search backs off from; the
             // first failure is kept, to name the cause if the start point itself fails.
             let mut first_failure: Option<LearnError> = None;
             let mut objective = |q: &[f64]| -> Option<(f64, Vec<f64>)> {
-                let p = unscale(q);
-                let evaluated = candidate
-                    .set_params(&p)
-                    .map_err(LearnError::from)
-                    .and_then(|()| self.predicted_value(&candidate, mm, true));
-                let out = match evaluated {
-                    Ok(out) => out,
+                match self.scaled_value(&mut candidate, mm, &scales, q) {
+                    Ok((j, grad)) => {
+                        observer.objective(ep, j);
+                        Some((j, grad))
+                    }
                     Err(e) => {
                         first_failure.get_or_insert(e);
-                        return None;
+                        None
                     }
-                };
-                observer.objective(ep, out.j);
-                let grad = out.grad?.iter().zip(&scales).map(|(g, s)| g * s).collect();
-                Some((out.j, grad))
+                }
             };
             let q0: Vec<f64> = base
                 .params()
@@ -434,7 +442,7 @@ where
                      {ep} starts from"
                 )),
             })?;
-            self.policy.set_params(&unscale(&result.x))?;
+            self.policy.set_params(&unscale(&result.x, &scales))?;
             let optimise_s = t0.elapsed().as_secs_f64();
             let out = self.predicted_value(&self.policy, mm, false)?;
             let (predicted_mean, predicted_std) = self.ret.predicted_return(&out);
@@ -528,6 +536,11 @@ where
     }
 }
 
+/// ψ = scale ⊙ q: the policy parameters at the optimiser's point `q`.
+fn unscale(q: &[f64], scales: &[f64]) -> Vec<f64> {
+    q.iter().zip(scales).map(|(q, s)| q * s).collect()
+}
+
 pub(crate) fn mat_rows(m: &Mat<f64>) -> Vec<Vec<f64>> {
     (0..m.nrows())
         .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
@@ -553,3 +566,6 @@ fn termination_text(t: &Termination) -> String {
         Termination::LineSearchFailed(m) => format!("line search failed: {m}"),
     }
 }
+
+#[cfg(test)]
+mod tests;
