@@ -71,6 +71,8 @@ impl Tensor {
     }
 
     /// Symmetrise over the last two indices (for derivatives w.r.t. a covariance matrix).
+    /// Panics unless they exist and are of equal length, as for a tensor vicpilco computed;
+    /// a stored one goes through [`Case::cov_derivative`], which names the field instead.
     pub fn symmetrise_last_pair(&mut self) {
         let r = self.shape.len();
         assert!(r >= 2 && self.shape[r - 1] == self.shape[r - 2]);
@@ -262,17 +264,48 @@ impl Case {
 
     /// The Gaussian input `m` (length `d`) and `s` (`d`×`d`) of a moment-matching case.
     pub fn gaussian_input(&self, d: usize) -> Result<(Vec<f64>, Mat<f64>), OracleError> {
-        let (m, s) = (self.vec("m")?, self.mat("s")?);
+        self.gaussian("m", "s", d)
+    }
+
+    /// A Gaussian stored as fields `mean` (length `d`) and `cov` (`d`×`d`), e.g. the value
+    /// cases' start `m0`, `S0`; fails naming the field of the wrong size.
+    pub fn gaussian(
+        &self,
+        mean: &str,
+        cov: &str,
+        d: usize,
+    ) -> Result<(Vec<f64>, Mat<f64>), OracleError> {
+        let (m, s) = (self.vec(mean)?, self.mat(cov)?);
         if m.len() != d {
-            return Err(self.bad("m", &format!("expected length {d}, got {}", m.len())));
+            return Err(self.bad(mean, &format!("expected length {d}, got {}", m.len())));
         }
         if (s.nrows(), s.ncols()) != (d, d) {
             return Err(self.bad(
-                "s",
+                cov,
                 &format!("expected {d}×{d}, got {}×{}", s.nrows(), s.ncols()),
             ));
         }
         Ok((m, s))
+    }
+
+    /// Field `name`, a derivative w.r.t. a covariance matrix, symmetrised over its last two
+    /// indices ([`Tensor::symmetrise_last_pair`]); fails naming the field unless it has two
+    /// last indices of equal length.
+    pub fn cov_derivative(&self, name: &str) -> Result<Tensor, OracleError> {
+        let mut t = self.tensor(name)?;
+        let r = t.shape.len();
+        if r < 2 || t.shape[r - 1] != t.shape[r - 2] {
+            return Err(self.bad(
+                name,
+                &format!(
+                    "expected the last two axes of equal length (a derivative w.r.t. a \
+                     covariance), shape {:?}",
+                    t.shape
+                ),
+            ));
+        }
+        t.symmetrise_last_pair();
+        Ok(t)
     }
 
     /// A nested object (e.g. `prop1` of the value cases) as a case of its own.

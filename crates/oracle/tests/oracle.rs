@@ -206,13 +206,18 @@ fn malformed_cases_are_errors_naming_the_field() {
         serde_json::Value::Array(a)
     }
     type Damage = fn(&serde_json::Value) -> serde_json::Value;
-    let damages: [(&str, &str, Damage); 6] = [
+    let damages: [(&str, &str, Damage); 9] = [
         ("congp", "hyp", |_| serde_json::json!([[0.5]])),
         ("gp0", "hyp", |_| serde_json::json!([[0.5]])),
         ("nlml", "hyp", |_| serde_json::json!([0.5])),
         ("gSat", "m", longer),
         ("gTrig", "m", longer),
         ("conlin", "m", longer),
+        // Stored outputs symmetrised before the comparison: these panicked on an assert.
+        ("gp0", "dSds", |_| serde_json::json!([[0.5, 0.5]])),
+        ("gp1", "dMds", |_| serde_json::json!([0.5])),
+        // The start of a whole prediction: this panicked inside the first step.
+        ("value", "m0", longer),
     ];
     for (kind, field, damage) in damages {
         let original = &found[kind][0];

@@ -79,7 +79,7 @@ where
         gamma: case.scalar("gamma")?,
         horizon,
     };
-    let (m0, s0) = (case.vec("m0")?, case.mat("S0")?);
+    let (m0, s0) = case.gaussian("m0", "S0", d0)?;
     let v =
         value(&pred, &ret, &[(m0.clone(), s0.clone())], true).map_err(|e| compute_err(case, e))?;
     let traj = &v.trajectories[0];
@@ -175,10 +175,11 @@ where
         ("dSds", &js.ds),
         ("dSdp", &js.dp),
     ] {
-        let mut want = prop1.tensor(field)?;
-        if field.ends_with("ds") {
-            want.symmetrise_last_pair();
-        }
+        let want = if field.ends_with("ds") {
+            prop1.cov_derivative(field)?
+        } else {
+            prop1.tensor(field)?
+        };
         let tol = crate::Tolerance::for_case(&case.kind, &case.name);
         out.push(crate::compare(
             &format!("prop1.{field}"),
