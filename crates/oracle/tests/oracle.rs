@@ -6,21 +6,74 @@ use std::collections::BTreeSet;
 use std::path::PathBuf;
 use vicpilco_oracle::{checkers, default_dir, discover, Case};
 
-/// The oracle directory, or `None` (with a notice) when it is absent outside CI.
+/// The oracle directory, or `None` (with a notice) when the default one is absent outside CI.
 fn oracle_dir() -> Option<PathBuf> {
-    let dir = default_dir();
+    let explicit = std::env::var_os("VICPILCO_ORACLE_DIR").is_some();
+    match locate(default_dir(), explicit, std::env::var_os("CI").is_some()) {
+        Found::Dir(dir) => Some(dir),
+        Found::Skip(msg) => {
+            eprintln!("skipping: {msg}");
+            None
+        }
+        Found::Fail(msg) => panic!("{msg}"),
+    }
+}
+
+/// What [`locate`] decided.
+#[derive(Debug)]
+enum Found {
+    Dir(PathBuf),
+    Skip(String),
+    Fail(String),
+}
+
+/// `dir` if it is a directory. A directory named in `VICPILCO_ORACLE_DIR` (`explicit`) that is
+/// not there fails: whoever set it meant the tests to run, and a typo must not pass them all
+/// unchecked. Only the default path may be absent, and only outside CI.
+fn locate(dir: PathBuf, explicit: bool, ci: bool) -> Found {
     if dir.is_dir() {
-        return Some(dir);
+        return Found::Dir(dir);
+    }
+    if explicit {
+        return Found::Fail(format!(
+            "VICPILCO_ORACLE_DIR={} is not a directory",
+            dir.display()
+        ));
     }
     let msg = format!(
         "oracle directory {} not found (set VICPILCO_ORACLE_DIR)",
         dir.display()
     );
-    if std::env::var_os("CI").is_some() {
-        panic!("{msg}");
+    if ci {
+        Found::Fail(msg)
+    } else {
+        Found::Skip(msg)
     }
-    eprintln!("skipping: {msg}");
-    None
+}
+
+#[test]
+fn a_missing_oracle_directory_is_skipped_only_when_it_is_the_default_outside_ci() {
+    let missing = std::env::temp_dir().join(format!("vicpilco-no-oracle-{}", std::process::id()));
+    for ci in [false, true] {
+        let found = locate(missing.clone(), true, ci);
+        assert!(
+            matches!(&found, Found::Fail(msg) if msg.starts_with("VICPILCO_ORACLE_DIR=")),
+            "explicit, CI {ci}: {found:?}"
+        );
+    }
+    let found = locate(missing.clone(), false, true);
+    assert!(
+        matches!(&found, Found::Fail(msg) if msg.contains("not found")),
+        "{found:?}"
+    );
+    let found = locate(missing, false, false);
+    assert!(
+        matches!(&found, Found::Skip(msg) if msg.contains("not found")),
+        "{found:?}"
+    );
+    let here = std::env::temp_dir();
+    let found = locate(here.clone(), true, false);
+    assert!(matches!(&found, Found::Dir(d) if *d == here), "{found:?}");
 }
 
 /// `inputs`: the fields of this kind that are inputs; every other field is an output that
