@@ -40,7 +40,7 @@ pub struct ReplaySource {
 /// checkpoint. The source run must be of the same experiment and seed, with the same settings
 /// but `gp.model_selection` (and the number of updates); `out` must not hold a run yet
 /// ([`ExperimentError::RunExists`]). When `out` does not exist yet, graft makes it and returns
-/// its lock too ([`crate::record::lock_run_dir`]), taken before anything is written into it,
+/// its lock too (on [`crate::record::LOCK_FILE`]), taken before anything is written into it,
 /// for the caller to hold for the run (an existing `out` was locked by the caller).
 pub fn graft<P>(
     source: &Path,
