@@ -103,10 +103,11 @@ pub(crate) fn range(vals: impl IntoIterator<Item = f64>, pad: f64) -> (f64, f64)
 }
 
 /// How far past the drawn data (means and recordings) a prediction band may stretch the
-/// y-axis, as a fraction of the data's span on each side. A long prediction's ±2σ band can be
-/// 20× wider than everything recorded (ẋ to ±4 m/s against 0.3 m/s of data), which would draw
-/// the recording and the mean as flat lines; beyond this the band is cut at the axis.
-pub(crate) const BAND_REACH: f64 = 0.5;
+/// y-axis, as a fraction of the data's span on each side, so the data keeps at least a third
+/// of the axis. A long prediction's ±2σ band can be 20× wider than everything recorded (ẋ to
+/// ±4 m/s against 0.3 m/s of data), which would draw the recording and the mean as flat lines;
+/// beyond this the band is cut at the axis.
+pub(crate) const BAND_REACH: f64 = 1.0;
 
 /// The y-range of a panel showing `data` (means, recordings) and the band `lo..hi`: all of the
 /// band when it stays within [`BAND_REACH`] of the data's span, else the data's range widened
@@ -565,15 +566,15 @@ mod tests {
     #[test]
     fn a_band_far_wider_than_the_data_is_cut_and_a_narrow_one_is_not() {
         let data = [0.0, 1.0];
-        // Within half the data's span on each side: all of the band shows.
-        let (y, cut) = band_view(data, &[-0.4], &[1.3], 0.0);
-        assert_eq!((y, cut), ((-0.4, 1.3), false));
-        // A band 20× the data's span is cut at half that span past the data.
+        // Within the data's span on each side: all of the band shows.
+        let (y, cut) = band_view(data, &[-0.9], &[1.3], 0.0);
+        assert_eq!((y, cut), ((-0.9, 1.3), false));
+        // A band 20× the data's span is cut at that span past the data.
         let (y, cut) = band_view(data, &[-10.0], &[10.0], 0.0);
-        assert_eq!((y, cut), ((-0.5, 1.5), true));
+        assert_eq!((y, cut), ((-1.0, 2.0), true));
         // Cut on one side only.
         let (y, cut) = band_view(data, &[0.2], &[10.0], 0.0);
-        assert_eq!((y, cut), ((0.0, 1.5), true));
+        assert_eq!((y, cut), ((0.0, 2.0), true));
     }
 
     #[test]
