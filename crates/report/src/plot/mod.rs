@@ -70,8 +70,8 @@ const MARGIN: u32 = 14;
 const MARGIN_RIGHT: u32 = 26;
 const X_LABEL_AREA: u32 = 48;
 const Y_LABEL_AREA: u32 = 78;
-pub(crate) const LABEL_PX: u32 = 16;
-pub(crate) const TICK_PX: u32 = 14;
+pub(crate) const LABEL_PX: u32 = 18;
+pub(crate) const TICK_PX: u32 = 16;
 
 /// Axis range of `vals` padded by `pad` of its span; a flat or empty series still gets a
 /// usable range.
