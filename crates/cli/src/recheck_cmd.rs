@@ -40,7 +40,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         for c in &changes {
             let reworded = match (&c.before, &c.after) {
                 (Some(b), Some(a)) if b.measured == a.measured && b.pass == a.pass => {
-                    " (its wording only)"
+                    " (its wording or acceptance rule only)"
                 }
                 _ => "",
             };

@@ -46,6 +46,13 @@ pub const SAME_SEED_BUNDLES: &[(&str, &[&str])] = &[
         ],
     ),
 ];
+/// Id of vilta's "final gains lowered after insertion", which issue 6 asks to report (the mean
+/// gains over the first and last 2 s), not to pass or fail: a run records it with no verdict
+/// and no acceptance rule, and the tables show it as reported.
+pub const VILTA_GAINS_LOWERED: &str = "vilta_gains_lowered";
+/// Claims that are reported, never judged.
+pub const REPORTED_ONLY: &[&str] = &[VILTA_GAINS_LOWERED];
+
 /// Id of "final return below the initial roll-out's and constant gains'", made by every VIL run
 /// and decided once the run has all its planned updates.
 pub const FINAL_BELOW_INITIAL: &str = "final_below_initial_and_constant";
@@ -61,6 +68,8 @@ pub(crate) enum Verdict {
     Pass,
     Fail,
     Undecided,
+    /// A claim the issue asks to report, not to judge ([`REPORTED_ONLY`]).
+    Reported,
 }
 
 impl Verdict {
@@ -73,11 +82,21 @@ impl Verdict {
         }
     }
 
+    /// One run's verdict on claim `c`: reported for a [`REPORTED_ONLY`] claim, else
+    /// [`Self::of_run`].
+    pub fn of_claim(c: &Claim) -> Verdict {
+        match c.id.as_deref() {
+            Some(id) if REPORTED_ONLY.contains(&id) => Verdict::Reported,
+            _ => Verdict::of_run(c.pass),
+        }
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Verdict::Pass => "pass",
             Verdict::Fail => "fail",
             Verdict::Undecided => "undecided",
+            Verdict::Reported => "reported",
         }
     }
 }
@@ -200,7 +219,11 @@ fn section(
             .and_then(|c| c.across_seeds)
     };
     for (key, first) in &keys {
-        seed_row(h, runs, &first.claim, rule_of(key), |r| of_claim(r, key));
+        if REPORTED_ONLY.contains(key) {
+            reported_row(h, runs, &first.claim, |r| of_claim(r, key).0);
+        } else {
+            seed_row(h, runs, &first.claim, rule_of(key), |r| of_claim(r, key));
+        }
     }
     // A bullet of the issue whose parts must hold on the same seed: one row more, so that
     // parts passing on different seeds do not read as the bullet passing.
@@ -226,6 +249,19 @@ fn section(
 
 /// One table row: `label`, the seed rule, each run's measured value and mark (seeds beyond the
 /// rule shown but not counted), the passing count and the verdict.
+/// A claim that is reported, not judged: each seed's numbers, no count and no verdict.
+fn reported_row(
+    h: &mut String,
+    runs: &[RunSummary],
+    label: &str,
+    value: impl Fn(&RunSummary) -> String,
+) {
+    let mut cells = vec![cell(label), "reported only".into()];
+    cells.extend(runs.iter().map(|r| cell(&value(r))));
+    cells.extend(["–".into(), Verdict::Reported.name().into()]);
+    row(h, &cells);
+}
+
 fn seed_row(
     h: &mut String,
     runs: &[RunSummary],

@@ -223,7 +223,7 @@ fn html_cell(c: &Cell) -> String {
             let (class, word) = match v {
                 Verdict::Pass => ("pass", "PASS"),
                 Verdict::Fail => ("fail", "FAIL"),
-                Verdict::Undecided => ("na", v.name()),
+                Verdict::Undecided | Verdict::Reported => ("na", v.name()),
             };
             format!("<td class=\"{class}\">{word}</td>")
         }

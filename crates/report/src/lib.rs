@@ -42,7 +42,8 @@ mod synthetic;
 mod tests;
 
 pub use acceptance::{
-    acceptance_markdown, FINAL_BELOW_INITIAL, SAME_SEED_BUNDLES, SIC_MEAN_K_Y_ABOVE_GIC,
+    acceptance_markdown, FINAL_BELOW_INITIAL, REPORTED_ONLY, SAME_SEED_BUNDLES,
+    SIC_MEAN_K_Y_ABOVE_GIC, VILTA_GAINS_LOWERED,
 };
 pub use error::ReportError;
 use std::path::{Path, PathBuf};

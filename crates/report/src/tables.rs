@@ -139,8 +139,11 @@ pub(crate) fn thesis(run: &Run) -> Option<Table> {
                 Cell::Text(c.claim.clone()),
                 Cell::Text(c.thesis.clone()),
                 Cell::Text(c.measured.clone()),
-                Cell::Verdict(Verdict::of_run(c.pass)),
-                Cell::Text(rule_text(c.across_seeds)),
+                Cell::Verdict(Verdict::of_claim(c)),
+                Cell::Text(match Verdict::of_claim(c) {
+                    Verdict::Reported => "reported only".into(),
+                    _ => rule_text(c.across_seeds),
+                }),
             ]
         })
         .collect();

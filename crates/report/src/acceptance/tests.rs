@@ -391,3 +391,51 @@ fn a_bullets_parts_must_hold_on_the_same_seed() {
     // Without all its parts among the claims, no bundle row.
     assert!(!md.contains(SAME_SEED_BUNDLES[0].0));
 }
+
+#[test]
+fn a_reported_claim_shows_each_seeds_numbers_and_no_verdict() {
+    let tmp = TempDir::new("acceptance-reported");
+    let gains = |seed: u64, measured: &str| {
+        let mut c = claim(
+            VILTA_GAINS_LOWERED,
+            "final gains lowered",
+            measured,
+            None,
+            false,
+        );
+        c["across_seeds"] = Value::Null;
+        write_summary(
+            tmp.path(),
+            &format!("vilta-{seed}"),
+            "vilta",
+            seed,
+            10.0,
+            vec![c],
+        )
+    };
+    let dirs = [gains(1, "(60, 150) -> (5, 20) N/m"), gains(2, "n.a.")];
+    let md = acceptance_markdown(&dirs).unwrap();
+    let row = row_of(&md, "final gains lowered");
+    assert_eq!(
+        row,
+        [
+            "final gains lowered",
+            "reported only",
+            "(60, 150) -> (5, 20) N/m",
+            "n.a.",
+            "–",
+            "reported"
+        ]
+    );
+    assert_eq!(
+        Verdict::of_claim(&crate::data::Claim {
+            id: Some(VILTA_GAINS_LOWERED.into()),
+            claim: "c".into(),
+            thesis: "t".into(),
+            measured: "m".into(),
+            pass: None,
+            across_seeds: None,
+        }),
+        Verdict::Reported
+    );
+}
