@@ -7,7 +7,7 @@ use vicpilco_gp::DynamicsOptions;
 use vicpilco_learn::outer::{LoopSetup, OptimiserOptions};
 use vicpilco_learn::selection::ModelSelection;
 use vicpilco_learn::start::StartDistribution;
-use vicpilco_learn::step::{StepSpec, Target};
+use vicpilco_learn::step::{LinearPrior, StepSpec, Target};
 use vicpilco_learn::value::ReturnSpec;
 use vicpilco_learn::LearnError;
 use vicpilco_pilco::cost::{CostSum, EnergyCost, SaturatingCost};
@@ -134,7 +134,7 @@ fn no_initial_rollouts_before_an_update_is_refused_before_the_system_runs() {
 #[test]
 fn parts_that_do_not_fit_are_refused_before_the_system_runs() {
     type Spoil = fn(&mut LoopSetup<LinearPolicy>);
-    let cases: [(&str, Spoil); 12] = [
+    let cases: [(&str, Spoil); 18] = [
         ("prior_shift", |s| s.prior_shift = Some(vec![vec![0.0]; 4])),
         ("prior_shift", |s| {
             s.prior_shift = Some(vec![vec![0.0, 1.0]; 5])
@@ -164,12 +164,38 @@ fn parts_that_do_not_fit_are_refused_before_the_system_runs() {
         }),
         // Two actions for a system with one.
         ("spec.state_dim", |s| s.policy = LinearPolicy::zeros(1, 2)),
+        // The step layout's own rules (StepSpec::validate).
+        ("angles", |s| s.spec.angles = vec![1]),
+        ("dyn_inputs", |s| s.spec.dyn_inputs = vec![3]),
+        ("targets", |s| s.spec.targets = vec![Target::Relative; 2]),
+        ("linear_prior", |s| {
+            s.spec.linear_prior = vec![LinearPrior {
+                target: 1,
+                state: 0,
+                coefficient: 1.0,
+            }]
+        }),
+        ("linear_prior", |s| {
+            s.spec.linear_prior = vec![LinearPrior {
+                target: 0,
+                state: 0,
+                coefficient: f64::NAN,
+            }]
+        }),
+        ("dt", |s| {
+            s.spec.time_input = true;
+            s.spec.dyn_inputs = vec![0, 1];
+            s.spec.dt = 0.0;
+        }),
     ];
     for (field, spoil) in cases {
         let mut env = Integrator::default();
         let mut bad = setup(1, 1);
         spoil(&mut bad);
-        let err = bad.run(&mut env, &mut ()).err().expect("refused");
+        let err = bad
+            .run(&mut env, &mut ())
+            .err()
+            .unwrap_or_else(|| panic!("{field}: not refused"));
         assert!(
             matches!(&err, LearnError::Spec(msg) if msg.starts_with(field)),
             "{field}: {err}"
