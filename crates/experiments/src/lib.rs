@@ -5,7 +5,7 @@
 //!
 //! * `summary.json` — per policy update: predicted return (mean, std), recorded return,
 //!   success (and the fraction of the update's roll-outs that succeeded, as a colour), timings;
-//!   `solved_at_episode`; the settings; the thesis's numbers beside the run's ([`checks`]);
+//!   `solved_at_episode` (and the `solved_streak` it means); the settings; the thesis's numbers beside the run's ([`checks`]);
 //! * `rollouts.jsonl` — every roll-out with its weighted cost per step, appended as recorded;
 //! * `predictions.jsonl` — every update's long-term prediction (means, variances, costs);
 //! * `policies.jsonl` — the parameters of the policy each update rolled out (episode 0: the

@@ -12,7 +12,7 @@
 //!   far and the config it belongs to. Every random stream is derived from the master seed and
 //!   the episode, so no generator state is needed to continue bit for bit.
 
-use crate::summary::{colour, solved_at, write_json_atomic, EpisodeSummary, Summary};
+use crate::summary::{colour, write_json_atomic, EpisodeSummary, Summary};
 use crate::{ExperimentError, RunOptions};
 use serde::{Deserialize, Serialize};
 use std::io::Write;
@@ -417,7 +417,7 @@ impl LoopObserver for Recorder<'_> {
             max_force: extras.map(|e| e.1),
             start_y: extras.map(|e| e.2),
         });
-        self.summary.solved_at_episode = solved_at(&self.summary.episodes);
+        self.summary.update_solved();
         self.summary.wall_s = self.wall_s();
         if let Some(claims) = &self.claims {
             self.summary.thesis_reference = claims(&self.summary);

@@ -5,7 +5,7 @@
 
 use crate::record::{lock_run_dir, refuse_recorded_run, PER_UPDATE_FILES};
 use crate::record::{Checkpoint, CHECKPOINT_FORMAT};
-use crate::summary::{solved_at, write_json_atomic};
+use crate::summary::write_json_atomic;
 use crate::ExperimentError;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -102,7 +102,7 @@ where
     for (e, record) in summary.episodes.iter_mut().zip(&replay.state.episodes) {
         e.record = record.clone();
     }
-    summary.solved_at_episode = solved_at(&summary.episodes);
+    summary.update_solved();
     summary.interaction_s = interaction_upto(source, agreed, dt)?;
     // The recorded run's time for the updates kept; this run's own sessions add theirs.
     summary.wall_s = summary

@@ -145,6 +145,10 @@ pub struct Summary {
     /// The first policy update at which the success test had held for the last
     /// [`SOLVED_STREAK`] consecutive updates; `null` if never.
     pub solved_at_episode: Option<usize>,
+    /// The [`SOLVED_STREAK`] that `solved_at_episode` used, written so that a report can say
+    /// what "solved" means; absent in summaries written before it was recorded (all used 3).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solved_streak: Option<usize>,
     /// Cumulative system time of all roll-outs (initial ones included), seconds.
     pub interaction_s: f64,
     /// Wall time of the whole run, seconds.
@@ -251,6 +255,7 @@ impl Summary {
             initial_return: None,
             episodes: Vec::new(),
             solved_at_episode: None,
+            solved_streak: Some(SOLVED_STREAK),
             interaction_s: 0.0,
             wall_s: 0.0,
             config,
@@ -263,6 +268,12 @@ impl Summary {
             sessions: Vec::new(),
             replayed_from: None,
         }
+    }
+
+    /// Recomputes `solved_at_episode` from the episodes, and records the streak it used.
+    pub fn update_solved(&mut self) {
+        self.solved_at_episode = solved_at(&self.episodes);
+        self.solved_streak = Some(SOLVED_STREAK);
     }
 
     fn check_finite(&self) -> Result<(), WriteError> {

@@ -53,6 +53,11 @@ fn pendulum_two_updates_write_a_reproducible_summary() {
     ] {
         assert!(sa.get(key).is_some(), "summary.json lacks {key}");
     }
+    assert_eq!(
+        sa["solved_streak"],
+        vicpilco_experiments::summary::SOLVED_STREAK,
+        "a report needs the streak to say what solved means"
+    );
     let numbers = |s: &serde_json::Value| -> Vec<(f64, f64, bool)> {
         s["episodes"]
             .as_array()

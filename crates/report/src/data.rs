@@ -112,6 +112,8 @@ pub(crate) struct Summary {
     pub constant_gain_inserted: Option<bool>,
     pub episodes: Vec<Episode>,
     pub solved_at_episode: Option<u64>,
+    /// Successive successful updates that count as "solved" (absent in older summaries).
+    pub solved_streak: Option<u64>,
     pub interaction_s: Option<f64>,
     pub wall_s: Option<f64>,
     pub config: Option<Value>,
@@ -157,12 +159,22 @@ impl Summary {
         parse_summary(Node::root(&file, "", &v))
     }
 
-    /// "update k", "not solved", or a dash before the first update.
+    /// "update k", "not solved", or a dash before the first update; with the streak known,
+    /// what "solved" means: the updates whose first roll-outs all succeeded.
     pub fn solved_text(&self) -> String {
-        match (self.solved_at_episode, self.episodes.is_empty()) {
-            (Some(k), _) => format!("update {k}"),
-            (None, false) => "not solved".into(),
-            (None, true) => "–".into(),
+        let streak = self.solved_streak.filter(|&n| n > 0);
+        match (self.solved_at_episode, self.episodes.is_empty(), streak) {
+            (Some(k), _, Some(1)) => format!("update {k} (its first roll-out succeeds)"),
+            (Some(k), _, Some(n)) => format!(
+                "update {k} (first roll-outs of updates {}–{k} all succeed)",
+                (k + 1).saturating_sub(n)
+            ),
+            (Some(k), _, None) => format!("update {k}"),
+            (None, false, Some(n)) => {
+                format!("not solved (never {n} successive updates whose first roll-out succeeds)")
+            }
+            (None, false, None) => "not solved".into(),
+            (None, true, _) => "–".into(),
         }
     }
 

@@ -26,6 +26,7 @@ pub(super) fn parse_summary(n: Node<'_>) -> Result<Summary, ReportError> {
         constant_gain_inserted: n.opt_bool("constant_gain_inserted")?,
         episodes,
         solved_at_episode: n.opt_u64("solved_at_episode")?,
+        solved_streak: n.opt_u64("solved_streak")?,
         interaction_s: n.opt_f64("interaction_s")?,
         wall_s: n.opt_f64("wall_s")?,
         config: n.v.get("config").cloned(),

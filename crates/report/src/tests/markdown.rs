@@ -108,7 +108,10 @@ fn markdown_report_has_a_row_per_update_and_every_claim() {
     let totals = md_rows(&page, "## Totals");
     let value = |k: &str| totals.iter().find(|r| r[0] == k).map(|r| r[1]).unwrap();
     assert_eq!(value("policy updates"), eps.len().to_string());
-    assert_eq!(value("solved at"), "update 4");
+    assert_eq!(
+        value("solved at"),
+        "update 4 (first roll-outs of updates 2–4 all succeed)"
+    );
     assert_eq!(
         value("mean wall time per update (s)"),
         format!("{:.1}", 1234.5 / eps.len() as f64)
@@ -238,4 +241,27 @@ fn totals_say_which_updates_a_run_took_from_a_recorded_run() {
     write_report(tmp.path()).unwrap();
     assert!(replay_row(&markdown(tmp.path()))
         .starts_with("updates 1–2: the recorded run runs/shipped (rule last-rollout-states, 25 updates, final return 59.9);"));
+}
+
+#[test]
+fn solved_at_says_what_solved_means_when_the_summary_records_the_streak() {
+    let tmp = TempDir::new("md-solved");
+    write_run(tmp.path(), Kind::Vil);
+    let solved = |dir: &Path| {
+        write_report(dir).unwrap();
+        totals_value(&markdown(dir), "solved at")
+    };
+    edit_json(&tmp.path().join("summary.json"), |s| {
+        s["solved_at_episode"] = Value::Null;
+    });
+    assert_eq!(
+        solved(tmp.path()),
+        "not solved (never 3 successive updates whose first roll-out succeeds)"
+    );
+    // Summaries written before the streak was recorded say only the update.
+    edit_json(&tmp.path().join("summary.json"), |s| {
+        s["solved_at_episode"] = 6.into();
+        s.as_object_mut().unwrap().remove("solved_streak");
+    });
+    assert_eq!(solved(tmp.path()), "update 6");
 }

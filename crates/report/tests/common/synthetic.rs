@@ -394,6 +394,7 @@ pub fn write_run(dir: &Path, kind: Kind) {
         "initial_return": initial_return,
         "episodes": episodes,
         "solved_at_episode": 4,
+        "solved_streak": 3,
         "interaction_s": 10.0 * (1 + n_updates * per_update) as f64,
         "wall_s": 1234.5,
         "config": config,
