@@ -433,6 +433,38 @@ impl Run {
             .find(|r| r.episode == episode)
     }
 
+    /// The predicted return (mean, std) to set beside update `e`'s recorded first roll-out.
+    /// A policy optimised over K > 1 start distributions has K predictions, and summary.json
+    /// records the first's; the roll-out started from one state, so this is the prediction
+    /// from the start nearest it ([`Prediction::start_nearest`]), summed from
+    /// predictions.jsonl's weighted step costs, with which start it is (k of K, from 0).
+    /// Runs with one start, or without that prediction, get summary.json's numbers.
+    pub fn predicted_return(&self, e: &Episode) -> (f64, f64, Option<(usize, usize)>) {
+        let recorded = (e.pred_mean, e.pred_std, None);
+        let Some(p) = self
+            .predictions
+            .as_ref()
+            .and_then(|ps| ps.iter().find(|p| p.episode == e.index))
+            .filter(|p| p.starts.len() > 1)
+        else {
+            return recorded;
+        };
+        let k = p.start_nearest(self.rollout_of(e.index));
+        let which = Some((k, p.starts.len()));
+        if k == 0 {
+            return (e.pred_mean, e.pred_std, which);
+        }
+        let costs: Option<Vec<(f64, f64)>> = p.steps(k).iter().map(|s| s.weighted_cost).collect();
+        match costs {
+            Some(c) => (
+                c.iter().map(|c| c.0).sum(),
+                c.iter().map(|c| c.1).sum(),
+                which,
+            ),
+            None => recorded,
+        }
+    }
+
     /// The time step: the predictions' if any, else `config.dt`.
     pub fn dt(&self) -> Option<f64> {
         self.predictions

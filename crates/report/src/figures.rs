@@ -75,7 +75,8 @@ pub(crate) fn draw_all(
         if let Some(k) = starts.filter(|&k| k > 1) {
             caption.push_str(&format!(
                 " The policy is optimised over {k} start distributions; the predicted return \
-                 is the first's, as summary.json records it (predictions.jsonl holds all {k})."
+                 shown is the one from the start nearest the first roll-out's start (summed from \
+                 predictions.jsonl; summary.json records the first start's)."
             ));
         }
         if let Some(u) = final_policy {
@@ -86,6 +87,14 @@ pub(crate) fn draw_all(
         out.add(
             &Returns {
                 episodes: &s.episodes,
+                predicted: s
+                    .episodes
+                    .iter()
+                    .map(|e| {
+                        let (mean, std, _) = run.predicted_return(e);
+                        (mean, std)
+                    })
+                    .collect(),
                 initial_return: s.initial_return,
                 other_rollouts,
                 final_policy,

@@ -43,7 +43,20 @@ pub(crate) fn episodes(run: &Run) -> Table {
     // Runs that choose their model on the newest roll-out say which model each update used.
     let chosen = eps.iter().any(|e| e.kept_previous_model.is_some());
 
-    let mut header = vec!["update", "predicted (mean ± 1σ)", "recorded", "outcome"];
+    let predicted: Vec<_> = eps.iter().map(|e| run.predicted_return(e)).collect();
+    // With several start distributions the prediction beside the roll-out is its nearest
+    // start's, which the column names (k of K).
+    let several_starts = predicted.iter().any(|p| p.2.is_some());
+    let mut header = vec![
+        "update",
+        if several_starts {
+            "predicted from the nearest start (mean ± 1σ)"
+        } else {
+            "predicted (mean ± 1σ)"
+        },
+        "recorded",
+        "outcome",
+    ];
     if several {
         header.push("success fraction");
     }
@@ -71,11 +84,16 @@ pub(crate) fn episodes(run: &Run) -> Table {
 
     let rows = eps
         .iter()
-        .map(|e| {
+        .zip(&predicted)
+        .map(|(e, &(mean, std, start))| {
             let rollout = run.rollout_of(e.index);
+            let from = match start {
+                Some((k, n)) => format!(" (start {} of {n})", k + 1),
+                None => String::new(),
+            };
             let mut cells = vec![
                 Cell::Num(e.index.to_string()),
-                Cell::Num(format!("{:.2} ± {:.2}", e.pred_mean, e.pred_std)),
+                Cell::Num(format!("{mean:.2} ± {std:.2}{from}")),
                 Cell::Num(format!("{:.2}", e.recorded)),
                 Cell::Outcome(e.colour()),
             ];

@@ -9,6 +9,9 @@ use plotters::prelude::*;
 
 pub(crate) struct Returns<'a> {
     pub episodes: &'a [Episode],
+    /// Each update's predicted return (mean, std), in `episodes`' order
+    /// ([`crate::data::Run::predicted_return`]).
+    pub predicted: Vec<(f64, f64)>,
     pub initial_return: Option<f64>,
     /// (update, recorded return) of each roll-out after an update's first: runs with several
     /// roll-outs per update (`vilta-var`) show what the colour summarises.
@@ -38,8 +41,13 @@ impl Figure for Returns<'_> {
     {
         let eps = self.episodes;
         let xs: Vec<f64> = eps.iter().map(|e| e.index as f64).collect();
-        let lo: Vec<f64> = eps.iter().map(|e| e.pred_mean - Z95 * e.pred_std).collect();
-        let hi: Vec<f64> = eps.iter().map(|e| e.pred_mean + Z95 * e.pred_std).collect();
+        let means: Vec<(f64, f64)> = xs
+            .iter()
+            .zip(&self.predicted)
+            .map(|(&x, p)| (x, p.0))
+            .collect();
+        let lo: Vec<f64> = self.predicted.iter().map(|(m, s)| m - Z95 * s).collect();
+        let hi: Vec<f64> = self.predicted.iter().map(|(m, s)| m + Z95 * s).collect();
         let x = range(xs.iter().copied().chain([1.0]), 0.0);
         let x = (x.0 - 0.5, x.1 + 0.5);
         let y_vals = lo.iter().chain(&hi).copied();
@@ -64,7 +72,7 @@ impl Figure for Returns<'_> {
 
         let mut occ = Occupied::default();
         occ.band(&xs, &lo, &hi);
-        occ.line(eps.iter().map(|e| (e.index as f64, e.pred_mean)));
+        occ.line(means.iter().copied());
         let mut labels = vec![BAND.to_string(), MEAN.to_string()];
         if let Some(r0) = self.initial_return {
             occ.line([(x.0, r0), (x.1, r0)]);
@@ -107,23 +115,15 @@ impl Figure for Returns<'_> {
         });
         if eps.len() == 1 {
             // A one-point band has no width; an error bar shows the same interval.
-            c.draw_series(eps.iter().map(|e| {
-                let (m, s) = (e.pred_mean, Z95 * e.pred_std);
-                let x = e.index as f64;
-                PathElement::new([(x, m - s), (x, m + s)], PRED_BLUE.mix(0.5).stroke_width(8))
+            c.draw_series(xs.iter().zip(&lo).zip(&hi).map(|((&x, &lo), &hi)| {
+                PathElement::new([(x, lo), (x, hi)], PRED_BLUE.mix(0.5).stroke_width(8))
             }))?;
         }
-        c.draw_series(segments(
-            eps.iter().map(|e| (e.index as f64, e.pred_mean)),
-            PRED_BLUE.stroke_width(2),
-        ))?
-        .label(MEAN)
-        .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], PRED_BLUE.stroke_width(2)));
+        c.draw_series(segments(means.iter().copied(), PRED_BLUE.stroke_width(2)))?
+            .label(MEAN)
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], PRED_BLUE.stroke_width(2)));
         // Dots mark the updates on the line, and are all there is of it with one update.
-        c.draw_series(
-            eps.iter()
-                .map(|e| Circle::new((e.index as f64, e.pred_mean), 3, PRED_BLUE.filled())),
-        )?;
+        c.draw_series(means.iter().map(|&p| Circle::new(p, 3, PRED_BLUE.filled())))?;
 
         if let Some(r0) = self.initial_return {
             c.draw_series(DashedLineSeries::new(

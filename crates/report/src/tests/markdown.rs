@@ -265,3 +265,67 @@ fn solved_at_says_what_solved_means_when_the_summary_records_the_streak() {
     });
     assert_eq!(solved(tmp.path()), "update 6");
 }
+
+/// A run optimised over several start distributions (vilta-var) shows, beside each update's
+/// roll-out, the predicted return of the start nearest that roll-out's start, not summary.json's
+/// (the first start's).
+#[test]
+fn a_k_start_run_sets_the_nearest_starts_prediction_beside_the_roll_out() {
+    let tmp = TempDir::new("md-k-starts");
+    write_run(tmp.path(), Kind::ViltaVar);
+    // Three starts: the recorded prediction moved 0.5 m off in y (first and third) and as
+    // recorded (second, with doubled costs so that its return differs from the summary's).
+    edit_lines(&tmp.path().join("predictions.jsonl"), |_, v| {
+        let own = v["starts"][0].clone();
+        let shifted = |dy: f64, cost_scale: f64| -> Value {
+            let mut s = own.clone();
+            for step in s.as_array_mut().unwrap() {
+                let y = step["mean"][1].as_f64().unwrap();
+                step["mean"][1] = (y + dy).into();
+                for key in ["weighted_cost_mean", "weighted_cost_std"] {
+                    let c = step[key].as_f64().unwrap();
+                    step[key] = (c * cost_scale).into();
+                }
+            }
+            s
+        };
+        v["starts"] = Value::Array(vec![
+            shifted(0.5, 1.0),
+            shifted(0.0, 2.0),
+            shifted(-0.5, 1.0),
+        ]);
+    });
+    write_report(tmp.path()).unwrap();
+    let page = markdown(tmp.path());
+    assert!(page.contains("predicted from the nearest start (mean ± 1σ)"));
+    let predictions: Vec<Value> = std::fs::read_to_string(tmp.path().join("predictions.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(tmp.path().join("summary.json")).unwrap())
+            .unwrap();
+    let rows = md_rows(&page, "## Policy updates");
+    for (row, e) in rows.iter().zip(summary["episodes"].as_array().unwrap()) {
+        let p = predictions
+            .iter()
+            .find(|p| p["episode"] == e["index"])
+            .unwrap();
+        let sum = |key: &str| -> f64 {
+            p["starts"][1]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|s| s[key].as_f64().unwrap())
+                .sum()
+        };
+        let (mean, std) = (sum("weighted_cost_mean"), sum("weighted_cost_std"));
+        assert_ne!(
+            format!("{mean:.2}"),
+            format!("{:.2}", e["predicted_return_mean"].as_f64().unwrap())
+        );
+        assert_eq!(row[1], format!("{mean:.2} ± {std:.2} (start 2 of 3)"));
+    }
+    assert!(html(tmp.path()).contains("from the start nearest the first roll-out"));
+}
