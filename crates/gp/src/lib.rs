@@ -1,11 +1,14 @@
 //! # vicpilco-gp: the Gaussian-process engine of PILCO
 //!
 //! Multi-output GP regression (E independent GPs on shared inputs) with a squared-exponential
-//! ARD kernel, trained by maximising the log marginal likelihood, and **moment matching**:
+//! ARD kernel, trained by maximising the log marginal likelihood (with PILCO's hypCurb penalty on
+//! extreme hyper-parameters by default), exact or sparse (FITC, [`SparseGpModel`]), and
+//! **moment matching**:
 //! pushing a Gaussian input `x ~ N(m, s)` through the GP and returning the exact mean,
 //! covariance and input-output covariance of the output, with reverse-mode derivatives.
 //!
-//! Start from [`GpModel`] (exact GP). This crate knows nothing of policies, costs,
+//! Start from [`GpModel`] (exact GP); [`DynamicsModel`] is the learner's model, which picks the
+//! exact or the sparse GP by the size of its training set. This crate knows nothing of policies, costs,
 //! environments or the CLI.
 //!
 //! ## Example

@@ -6,6 +6,8 @@
 //! * [`value`]: the expected return over a horizon and `dJ/dψ` by one reverse sweep;
 //! * [`data`]: roll-outs and the GP training set built from them;
 //! * [`outer`]: the learning loop over an [`vicpilco_env::Environment`], with checkpoints;
+//! * [`record`]: what the loop reports after each update ([`record::LoopObserver`],
+//!   [`record::LoopState`], [`record::EpisodeRecord`]);
 //! * [`selection`]: which dynamics model an update optimises on (PILCO's refit or ours);
 //! * [`replay`]: where another selection rule would have parted from a recorded run;
 //! * [`start`]: start distributions of the real episodes.

@@ -12,6 +12,7 @@
 //! | saturating cost(s) `1 − exp(−½(x−z)ᵀW(x−z))`, sums of them | `lossSat` | eq. 4-8 | [`cost::SaturatingCost`], [`cost::CostSum`] |
 //! | normalised quadratic energy cost `aᵀS⁻¹a` | — | eqs. 4-9, 4-10 | [`cost::EnergyCost`] |
 //! | linear policy `u = w x + b` | `conlin` | eq. 3-21 | [`policy::LinearPolicy`] |
+//! | RBF policy: a GP's mean with learnable support points and targets | `conGP` | §4-3, eqs. 4-17, 4-18 | [`policy::RbfPolicy`] |
 //!
 //! ## Conventions (all blocks)
 //!
@@ -32,11 +33,14 @@
 //!   flat `unwrap` order (see [`policy::Policy`]), so one backward sweep over a trajectory
 //!   builds `dJ/dψ` without per-step allocations of parameter length.
 //!
-//! Shapes are validated by constructors (returning [`PilcoError`]); passing a forward input of
-//! the wrong dimension is a programming error and panics with a message.
+//! Shapes are validated by constructors (returning [`PilcoError`]). The policies' `forward`
+//! checks its input too (an error naming it); the squashing and cost blocks, which run inside
+//! the horizon's loop, treat an input of the wrong dimension as a programming error and panic
+//! with a message.
 //!
 //! Every derivative here is checked against central finite differences
-//! (`vicpilco_gp::fd`) and, for `gSat`, `gTrig`, `lossSat` and `conlin`, against the original
+//! (`vicpilco_gp::fd`) and, for `gSat`, `gTrig`, `lossSat`, `conlin` and `conGP` (the RBF
+//! policy), against the original
 //! PILCO MATLAB code (`vicpilco-oracle`).
 //!
 //! ## Example

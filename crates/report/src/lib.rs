@@ -20,6 +20,10 @@
 //!
 //! [`acceptance_markdown`] reads the summary.json of several runs and tabulates each thesis claim
 //! over the seeds with its acceptance verdict (issue 6).
+//!
+//! Two modules serve the experiments crate too: [`jsonl`] reads and trims a run's JSON-lines
+//! records (resume, replay), and [`difference`] says where two settings records first differ
+//! (resume, replay, recheck, acceptance).
 
 #![warn(missing_docs)]
 
