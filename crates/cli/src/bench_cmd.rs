@@ -5,9 +5,10 @@ use std::path::PathBuf;
 pub struct Args {
     /// Workload name (only `w1` exists).
     workload: String,
-    /// Workload file.
-    #[arg(long, default_value = "../shared/bench/w1.json")]
-    file: PathBuf,
+    /// Workload file [default: w1.json in `VICPILCO_BENCH_DIR`, else in ../shared/bench beside
+    /// the repository, as `cargo bench` reads it].
+    #[arg(long)]
+    file: Option<PathBuf>,
     /// Timed repetitions after one warm-up call (the median is reported).
     #[arg(long, default_value_t = 5)]
     reps: usize,
@@ -22,14 +23,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "unknown workload `{}` (known: w1)",
         args.workload
     );
-    let w1 = vicpilco_bench::W1::load(&args.file).context("loading the benchmark workload")?;
+    let file = args
+        .file
+        .unwrap_or_else(|| vicpilco_bench::default_dir().join("w1.json"));
+    let w1 = vicpilco_bench::W1::load(&file).context("loading the benchmark workload")?;
     let t = w1.time(args.reps).map_err(|e| anyhow::anyhow!("{e}"))?;
     if args.json {
         println!("{}", serde_json::to_string(&t)?);
     } else {
         println!(
             "workload W1 ({}), median of {} after a warm-up, {} threads",
-            args.file.display(),
+            file.display(),
             t.repetitions,
             t.threads
         );

@@ -4,17 +4,19 @@ use std::process::ExitCode;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Directory holding the oracle case folders.
-    #[arg(long, default_value = "../shared/oracle")]
-    dir: PathBuf,
+    /// Directory holding the oracle case folders [default: `VICPILCO_ORACLE_DIR`, else
+    /// ../shared/oracle beside the repository, as the tests read it].
+    #[arg(long)]
+    dir: Option<PathBuf>,
     /// Print `{"kinds": {"<kind>": {"cases", "passed", "max_rel_err"}}}` instead of a table.
     #[arg(long)]
     json: bool,
 }
 
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let reports = vicpilco_oracle::check_dir(&args.dir)
-        .with_context(|| format!("checking the oracle cases in {}", args.dir.display()))?;
+    let dir = args.dir.unwrap_or_else(vicpilco_oracle::default_dir);
+    let reports = vicpilco_oracle::check_dir(&dir)
+        .with_context(|| format!("checking the oracle cases in {}", dir.display()))?;
     let failed = reports.values().any(|r| r.passed < r.cases && !r.skipped);
     if args.json {
         let kinds: serde_json::Map<String, serde_json::Value> = reports
