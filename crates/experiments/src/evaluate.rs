@@ -73,6 +73,7 @@ pub fn evaluate(
     name: &str,
     opts: &EvaluateOptions,
 ) -> Result<Vec<UpdateEvaluation>, ExperimentError> {
+    let name = crate::config::canonical(name);
     let cfg = recorded_arm_config(name, opts.run.config.as_deref(), opts.run.quick, "evaluate")?;
     let bad = |message: String| ExperimentError::Evaluate {
         path: opts.run.from.clone(),

@@ -288,6 +288,7 @@ pub fn run(
     opts: &RunOptions,
     observer: &mut dyn LoopObserver,
 ) -> Result<Summary, ExperimentError> {
+    let name = config::canonical(name);
     let cfg = load_config(name, opts.config.as_deref())?;
     if cfg.is_none() && opts.replay_from.is_some() {
         // The classic runs have one model-selection rule, so nothing to replay under another.
@@ -492,6 +493,7 @@ pub fn rescore(
     name: &str,
     opts: &RecordedRunOptions,
 ) -> Result<Vec<vicpilco_learn::replay::ReplayedUpdate>, ExperimentError> {
+    let name = config::canonical(name);
     let cfg = recorded_arm_config(name, opts.config.as_deref(), opts.quick, "rescore")?;
     let identity = arm_identity(&cfg)?;
     subnormals::run_flushed(|| match cfg.policy.kind {

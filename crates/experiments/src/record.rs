@@ -231,7 +231,8 @@ pub fn read_checkpoint(
         message,
     };
     let cp = read_checkpoint_unchecked(dir)?;
-    if cp.experiment != experiment {
+    // Runs recorded under an alias before runs recorded the name it stands for.
+    if crate::config::canonical(&cp.experiment) != crate::config::canonical(experiment) {
         return Err(bad(format!(
             "written by experiment `{}`, not `{experiment}`",
             cp.experiment

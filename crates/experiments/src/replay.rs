@@ -152,7 +152,9 @@ fn open_source(
         message,
     };
     let recorded = crate::record::read_checkpoint_unchecked(source)?;
-    if recorded.experiment != experiment || recorded.seed != seed {
+    let same_experiment =
+        crate::config::canonical(&recorded.experiment) == crate::config::canonical(experiment);
+    if !same_experiment || recorded.seed != seed {
         return Err(bad(format!(
             "a run of `{}` with seed {}, not `{experiment}` with seed {seed}",
             recorded.experiment, recorded.seed

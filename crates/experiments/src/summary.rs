@@ -128,7 +128,8 @@ pub const VERSION_TEXT: &str = concat!(
 /// The run summary written to `DIR/summary.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Summary {
-    /// The experiment name as given to [`crate::run`] (an alias such as `vil-gic` is kept).
+    /// The experiment's name: the one an alias stands for ([`crate::config::canonical`]; runs
+    /// before 2026-12-07 kept `vil-gic` as given).
     pub experiment: String,
     /// The run's master seed ([`crate::RunOptions::seed`]).
     pub seed: u64,

@@ -288,6 +288,8 @@ fn vil_gic_quick_run_writes_every_file_and_resumes_bit_for_bit() {
     };
     let summary = run("vil-gic", &opts(&full, None, false), &mut watch).expect("vil-gic quick run");
     assert_eq!(summary.episodes.len(), vicpilco_experiments::QUICK_EPISODES);
+    // An alias records the name it stands for, so its runs resume and pool as that name's.
+    assert_eq!(summary.experiment, "vil-gic-rbf10");
     // A run stopped after any update already lists every claim; those its updates cannot
     // decide yet (here: all of them, three updates being too few) stay open.
     assert_eq!(watch.seen.len(), vicpilco_experiments::QUICK_EPISODES);
@@ -384,7 +386,8 @@ fn vil_gic_quick_run_writes_every_file_and_resumes_bit_for_bit() {
         .open(split.join("rollouts.jsonl"))
         .unwrap();
     std::io::Write::write_all(&mut rollouts, b"{\"costs\":[1.0,0.9").unwrap();
-    run("vil-gic", &opts(&split, None, true), &mut ()).expect("resumed part");
+    // Started as `vil-gic`, resumed as the name the alias stands for.
+    run("vil-gic-rbf10", &opts(&split, None, true), &mut ()).expect("resumed part");
 
     assert_eq!(
         summary_without_timings(&full),

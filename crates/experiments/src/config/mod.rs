@@ -41,6 +41,16 @@ pub const CONFIGS: &[(&str, &str)] = &[
 /// Names that stand for another config.
 pub const ALIASES: &[(&str, &str)] = &[("vil-gic", "vil-gic-rbf10")];
 
+/// The name an alias stands for (`vil-gic` → `vil-gic-rbf10`), any other name unchanged. Runs
+/// record this name, so a run started under an alias resumes, replays and pools in `acceptance`
+/// with those started under the name itself.
+pub fn canonical(name: &str) -> &str {
+    ALIASES
+        .iter()
+        .find(|(alias, _)| *alias == name)
+        .map_or(name, |(_, target)| target)
+}
+
 /// A bad config: which file, which key, what is wrong.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
@@ -441,10 +451,7 @@ impl FinalPolicy {
 /// `(label, text)` of a shipped config: its name (an alias resolved to the name it stands for)
 /// and its TOML text.
 pub fn shipped(name: &str) -> Option<(&'static str, &'static str)> {
-    let name = ALIASES
-        .iter()
-        .find(|(a, _)| *a == name)
-        .map_or(name, |(_, t)| t);
+    let name = canonical(name);
     CONFIGS.iter().find(|(n, _)| *n == name).copied()
 }
 
