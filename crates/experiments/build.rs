@@ -13,8 +13,15 @@ fn git(args: &[&str]) -> Option<String> {
 
 fn main() {
     let commit = git(&["rev-parse", "--short=12", "HEAD"]);
-    let dirty =
-        git(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
+    // Without optional locks `status` does not write its refreshed index back: a written index
+    // is a file this script watches, and would rebuild the crate once more on the next build.
+    let dirty = git(&[
+        "--no-optional-locks",
+        "status",
+        "--porcelain",
+        "--untracked-files=no",
+    ])
+    .is_some_and(|s| !s.is_empty());
     let label = match commit {
         Some(c) if dirty => format!("{c}+dirty"),
         Some(c) => c,
