@@ -12,7 +12,8 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Run directory (summary.json, the JSON-lines records, checkpoint, policy, report);
-    /// default runs/<name>-seed<S>.
+    /// default runs/<name>-seed<S>, or runs/<name>-quick-seed<S> with --quick (a smoke run
+    /// then never meets a full run's directory).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Number of policy updates (default: the experiment's).
@@ -95,9 +96,10 @@ impl LoopObserver for Progress {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let quick = if args.quick { "-quick" } else { "" };
     let out = args
         .out
-        .unwrap_or_else(|| PathBuf::from(format!("runs/{}-seed{}", args.name, args.seed)));
+        .unwrap_or_else(|| PathBuf::from(format!("runs/{}{quick}-seed{}", args.name, args.seed)));
     let opts = vicpilco_experiments::RunOptions {
         seed: args.seed,
         out: out.clone(),
@@ -114,6 +116,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ProgressStyle::with_template("{bar:30} {pos}/{len} updates, ETA {eta}  {msg}")
             .expect("valid template"),
     );
+    if args.resume {
+        // Said before the first new update, which may be minutes away; a checkpoint that
+        // cannot be read is the run's own error to report.
+        if let Ok(cp) = vicpilco_experiments::record::read_checkpoint_unchecked(&out) {
+            let done = cp.summary.episodes.len();
+            println!("resuming {}: {done} of {total} updates done", out.display());
+            bar.set_position(done as u64);
+        }
+    }
     let mut progress = Progress {
         bar,
         last_j: f64::NAN,
@@ -122,10 +133,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .with_context(|| format!("running `{}`", args.name))?;
     progress.bar.finish_and_clear();
     println!(
-        "{}: seed {}, {} updates, {}, {:.1} s of interaction, {:.0} s wall; wrote {}",
+        "{}: seed {}, {} update{}, {}, {:.1} s of interaction, {:.0} s wall; wrote {}",
         summary.experiment,
         summary.seed,
         summary.episodes.len(),
+        if summary.episodes.len() == 1 { "" } else { "s" },
         summary
             .solved_at_episode
             .map_or("never solved".to_string(), |e| format!(
