@@ -42,10 +42,10 @@ enum Command {
     /// summary.json (per update: predicted and recorded return, success, interaction, training
     /// and optimisation time; the thesis's numbers beside the run's), rollouts.jsonl,
     /// predictions.jsonl and policies.jsonl (every roll-out, long-term prediction and policy,
-    /// appended as recorded), checkpoint.json (for --resume), policy.json (the last update's
-    /// policy and dynamics hyper-parameters; under vilta.final_policy = "most-successful" the
-    /// policy handed over is policies.jsonl's line of summary.json's final_eval.update), and
-    /// the plots, report.html and report.md.
+    /// appended as recorded), checkpoint.json (for --resume), and the plots, report.html and
+    /// report.md. When the run ends it adds policy.json (the last update's policy and dynamics
+    /// hyper-parameters; under vilta.final_policy = "most-successful" the policy handed over is
+    /// policies.jsonl's line of summary.json's final_eval.update).
     Run(run_cmd::Args),
     /// Check vicpilco's maths against reference values from the original PILCO MATLAB code.
     ///

@@ -5,14 +5,16 @@
 //!
 //! * `summary.json` — per policy update: predicted return (mean, std), recorded return,
 //!   success (and the fraction of the update's roll-outs that succeeded, as a colour), timings;
-//!   `solved_at_episode` (and the `solved_streak` it means); the settings; the thesis's numbers beside the run's ([`checks`]);
+//!   `solved_at_episode` (and the `solved_streak` it means); the settings; the thesis's
+//!   numbers beside the run's ([`checks`]);
 //! * `rollouts.jsonl` — every roll-out with its weighted cost per step, appended as recorded;
 //! * `predictions.jsonl` — every update's long-term prediction (means, variances, costs);
 //! * `policies.jsonl` — the parameters of the policy each update rolled out (episode 0: the
 //!   untrained policy the first update starts from), in [`Policy::params`]' order;
 //! * `checkpoint.json` — what `--resume` needs to continue bit for bit;
-//! * `policy.json` — the last update's policy parameters and dynamics hyper-parameters (the
-//!   policy a `most-successful` run hands over is `policies.jsonl`'s at `final_eval.update`);
+//! * `policy.json` — written when the run ends: the last update's policy parameters and
+//!   dynamics hyper-parameters (the policy a `most-successful` run hands over is
+//!   `policies.jsonl`'s at `final_eval.update`);
 //! * `final_eval.jsonl` — runs with evaluation starts: the final policy from fresh starts
 //!   (any update's policy: [`evaluate`]);
 //! * `report.html`, `report.md` and the plots (PNG, SVG) — [`vicpilco_report`], rewritten
@@ -149,9 +151,10 @@ pub enum ExperimentError {
     /// a seed other than its setup's.
     #[error("run of a system of your own: {0}")]
     OwnRun(String),
-    /// `--resume` cannot continue: no or unreadable checkpoint, another experiment, seed or
-    /// setting.
-    #[error("cannot resume from {path}: {message}")]
+    /// A run's checkpoint cannot be continued or read back (`--resume`, and `rescore`,
+    /// `evaluate` and `--replay-from` on a recorded run): none, unreadable, or of another
+    /// experiment, seed or setting.
+    #[error("cannot continue from {path}: {message}")]
     Resume {
         /// `checkpoint.json`, or the JSON-lines file with a bad line.
         path: PathBuf,

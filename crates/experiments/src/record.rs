@@ -258,8 +258,26 @@ pub fn read_checkpoint_unchecked(dir: &Path) -> Result<Checkpoint, ExperimentErr
         path: path.clone(),
         message,
     };
-    let text =
-        std::fs::read_to_string(&path).map_err(|e| bad(format!("nothing to resume ({e})")))?;
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        let archive = dir.join("run.tar.xz");
+        bad(if archive.is_file() {
+            // A folder of results/ holds the run packed (scripts/archive-run).
+            let name = dir
+                .file_name()
+                .map_or("run".into(), |n| n.to_string_lossy().into_owned());
+            format!(
+                "no checkpoint ({e}); {} is a stored run, to be unpacked first: mkdir -p \
+                 runs/{name} && tar -C runs/{name} -xJf {}, then give runs/{name}",
+                dir.display(),
+                archive.display()
+            )
+        } else {
+            format!(
+                "no checkpoint ({e}): not a run directory, or its run stopped before the \
+                 first update"
+            )
+        })
+    })?;
     let format: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
     if format["format"].as_u64() != Some(CHECKPOINT_FORMAT as u64) {
         return Err(bad(format!(
@@ -284,7 +302,14 @@ pub(crate) fn create_new(path: &Path) -> Result<std::fs::File, ExperimentError> 
         .write(true)
         .create_new(true)
         .open(path)
-        .map_err(io_err)
+        .map_err(|e| match e.kind() {
+            std::io::ErrorKind::AlreadyExists => io_err(std::io::Error::new(
+                e.kind(),
+                "already exists, and a result written earlier is not overwritten: give another \
+                 --out, or delete it",
+            )),
+            _ => io_err(e),
+        })
 }
 
 impl Recorder<'_> {
