@@ -416,7 +416,8 @@ pub fn thesis_checks(
             "mean wall time per policy update <= 4 min",
             "17 min per episode (MATLAB, Xeon E5 3.5 GHz)",
             mean_wall.map_or("n.a.".into(), |w| format!("{w:.0} s")),
-            mean_wall.map(|w| w <= EPISODE_TIME_BAR_S),
+            // Over the whole run: the first updates, on little data, are the cheapest.
+            mean_wall.filter(|_| full).map(|w| w <= EPISODE_TIME_BAR_S),
         ));
     }
     out

@@ -127,8 +127,9 @@ pub enum ExperimentError {
     /// A run that does not resume (a fresh one, or `--replay-from`) was pointed at a directory
     /// that already holds a run: starting over would discard what that run recorded.
     #[error(
-        "{} already holds a run ({file}): continue it with --resume (--episodes N for more \
-         updates), or give another --out; delete the directory to start it afresh",
+        "{} already holds {held} ({file}): continue it with --resume (same experiment and \
+         seed; --episodes N for more updates), or give another --out; delete the directory to \
+         start it afresh",
         dir.display()
     )]
     RunExists {
@@ -136,6 +137,9 @@ pub enum ExperimentError {
         dir: PathBuf,
         /// The first of the run's files found there, e.g. `checkpoint.json`.
         file: &'static str,
+        /// Which run, from its checkpoint ("a run of `vil-sic`, seed 2, 25 updates done"),
+        /// or "a run" when there is none to read.
+        held: String,
     },
     /// Another process is running in the directory (it holds [`record::LOCK_FILE`]'s lock).
     #[error(

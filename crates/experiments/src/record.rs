@@ -167,6 +167,14 @@ pub(crate) fn refuse_recorded_run(dir: &Path) -> Result<(), ExperimentError> {
         Some(&file) => Err(ExperimentError::RunExists {
             dir: dir.to_path_buf(),
             file,
+            held: read_checkpoint_unchecked(dir).map_or("a run".into(), |cp| {
+                format!(
+                    "a run of `{}`, seed {}, {} updates done",
+                    cp.experiment,
+                    cp.seed,
+                    cp.summary.episodes.len()
+                )
+            }),
         }),
         None => Ok(()),
     }
