@@ -36,8 +36,10 @@ fn main() -> Result<()> {
     let data = &ck.state.data;
     anyhow::ensure!(
         data.len() > k,
-        "the run has {} roll-outs, need {}",
+        "the run has {} roll-outs (its initial one and {} updates), and K = {k} needs {}: give \
+         a smaller K, or continue the run (vicpilco run ... --resume --episodes N)",
         data.len(),
+        data.len().saturating_sub(1),
         k + 1
     );
     let input_names = arm::gp_input_names(&setup.spec, &env);

@@ -136,7 +136,12 @@ where
 {
     let (setup, _env) = arm::setup(cfg, policy.clone(), ck.seed)?;
     let data = &ck.state.data;
-    anyhow::ensure!(data.len() >= to, "the run has {} roll-outs", data.len());
+    anyhow::ensure!(
+        data.len() >= to,
+        "the run has {} roll-outs, and TO = {to} trains on {to}: give a smaller TO, or continue \
+         the run (vicpilco run ... --resume --episodes N)",
+        data.len()
+    );
 
     let inputs = shown_inputs(&setup.spec);
     print!("{:>3}{:>7}{:>9}{:>8}{:>9}", "K", "N", "J", "mean", "std");
