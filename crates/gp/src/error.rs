@@ -41,7 +41,8 @@ pub enum GpError {
     },
     /// A computation produced NaN/inf from finite inputs. Also raised for non-finite
     /// hyper-parameters, a non-positive FITC Γ, a negative variance in a moment-matching input
-    /// covariance, and parameter adjoints asked of a moment-matching flavour with model
+    /// covariance beyond propagation's cancellation (a small fraction of the input's scale),
+    /// and parameter adjoints asked of a moment-matching flavour with model
     /// uncertainty.
     #[error("{what}: numerical breakdown ({detail})")]
     Numerical {

@@ -80,11 +80,33 @@ pub(crate) fn mat_vec(a: MatRef<'_, f64>, v: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// How far below 0, as a fraction of the smallest squared length-scale on its input, a
-/// moment-matching input variance may come before it is refused as a caller's error rather
-/// than propagation's cancellation. The own-system example's 6 updates (seeds 1–3) reach
-/// 3.3e-5; the arm runs' quick updates reach none.
-pub(crate) const NEGATIVE_VARIANCE_OF_L2: f64 = 1e-3;
+/// How far below 0 a moment-matching input variance may come before it is refused as a
+/// caller's error rather than propagation's cancellation, as a fraction of the input's scale
+/// ([`negative_variance_scale`]). The own-system example's 6 updates (seeds 1–3) reach 7.0e-5
+/// of the data's variance and 3.3e-5 of ℓ²; the arm runs' quick updates reach none.
+pub(crate) const NEGATIVE_VARIANCE_FRACTION: f64 = 1e-3;
+
+/// The scale a negative variance on input `k` is measured against: the smaller of the
+/// smallest squared length-scale on it (the moments depend on `s` through `Λ⁻¹s + I`) and the
+/// variance of the model's centres along it (the input's own scale, which matters downstream:
+/// ARD lets an input the outputs ignore take a length-scale far beyond its data). A column of
+/// equal centres has no spread to measure by, and gets ℓ² alone.
+fn negative_variance_scale(model: &MmModel<'_>, k: usize) -> f64 {
+    let l2 = model
+        .hyp
+        .iter()
+        .map(|h| (2.0 * h.log_ls[k]).exp())
+        .fold(f64::INFINITY, f64::min);
+    let c = model.centres.col(k);
+    let n = c.nrows() as f64;
+    let mean = c.iter().sum::<f64>() / n;
+    let spread = c.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
+    if spread > 0.0 && spread.is_finite() {
+        l2.min(spread)
+    } else {
+        l2
+    }
+}
 
 /// The entry check of [`super::forward`], once per call: the model's parts agree in shape
 /// (its fields are public, so a hand-built one may not) and the input fits it.
@@ -156,28 +178,25 @@ pub(crate) fn check_moment_input(model: &MmModel<'_>, m: &[f64], s: MatRef<'_, f
     // path, and the Cholesky of `s + Λ` that follows catches gross indefiniteness. Variances
     // propagated over a horizon come out below 0 when the state is nearly deterministic: the
     // GP's predictive variance is a difference of terms far larger than itself (PILCO has the
-    // same and goes on). What the moments depend on is `s` against the kernel's `Λ` (through
-    // `Λ⁻¹s + I`), so a negative variance that is a small fraction of the smallest squared
-    // length-scale on that input changes them by about that fraction, while a caller's
-    // negative variance of the input's own scale is refused.
+    // same and goes on). One that is a small fraction of the input's scale changes the moments
+    // by about that fraction; a caller's negative variance of the input's scale is refused.
     let largest = (0..d).fold(0.0f64, |acc, k| acc.max(s[(k, k)].abs()));
-    let smallest_l2 = |k: usize| {
-        model
-            .hyp
-            .iter()
-            .map(|h| (2.0 * h.log_ls[k]).exp())
-            .fold(f64::INFINITY, f64::min)
+    let rounding = |k: usize| 1e-9 * (1.0 + m[k] * m[k] + largest);
+    // The scale, O(N) per input, only where a variance is below rounding.
+    let beyond = |k: usize| {
+        s[(k, k)] < -rounding(k)
+            && s[(k, k)]
+                < -(rounding(k) + NEGATIVE_VARIANCE_FRACTION * negative_variance_scale(model, k))
     };
-    let allowed =
-        |k: usize| 1e-9 * (1.0 + m[k] * m[k] + largest) + NEGATIVE_VARIANCE_OF_L2 * smallest_l2(k);
-    if let Some(k) = (0..d).find(|&k| s[(k, k)] < -allowed(k)) {
+    if let Some(k) = (0..d).find(|&k| beyond(k)) {
         return Err(GpError::Numerical {
             what: "moment-matching input covariance".into(),
             detail: format!(
-                "negative variance s[{k}, {k}] = {} at index {k}, beyond {NEGATIVE_VARIANCE_OF_L2} \
-                 of the smallest squared length-scale on that input ({})",
+                "negative variance s[{k}, {k}] = {} at index {k}, beyond \
+                 {NEGATIVE_VARIANCE_FRACTION} of that input's scale {} (the smaller of its \
+                 smallest squared length-scale and its centres' variance)",
                 s[(k, k)],
-                smallest_l2(k)
+                negative_variance_scale(model, k)
             ),
         });
     }

@@ -333,38 +333,44 @@ fn a_hand_built_model_without_centres_gives_the_prior() {
 #[test]
 fn a_negative_input_variance_is_named_with_its_index() {
     let mut rng = Lcg(32);
-    let gp = random_gp(&mut rng, 10, 2, 1);
+    // Two outputs with unequal length-scales on input 1 (0.5 and 2), and centres spread with
+    // variance about 1 along it: its scale is min(0.25, ~1) = 0.25.
+    let x = Mat::from_fn(40, 2, |_, _| rng.normal());
+    let y = Mat::from_fn(40, 2, |i, j| (x[(i, j)]).sin() + 0.1 * rng.normal());
+    let hyper = |ls1: f64| Hyper {
+        log_ls: vec![0.0, ls1.ln()],
+        log_sf: 0.0,
+        log_sn: -2.0,
+    };
+    let gp = GpModel::new(x.clone(), y.clone(), vec![hyper(2.0), hyper(0.5)]).unwrap();
     let mm = MmModel::with_uncertainty(&gp);
+    let s_with = |v: f64| {
+        Mat::from_fn(2, 2, |i, j| match (i, j) {
+            (0, 0) => 0.1,
+            (1, 1) => v,
+            _ => 0.0,
+        })
+    };
     // Small enough that `s + Λ` still factorises: only the explicit check can refuse it.
-    let s = Mat::from_fn(2, 2, |i, j| match (i, j) {
-        (0, 0) => 0.1,
-        (1, 1) => -0.01,
-        _ => 0.0,
-    });
-    let err = forward(&mm, &[0.0, 0.0], s.as_ref()).unwrap_err();
+    let err = forward(&mm, &[0.0, 0.0], s_with(-0.01).as_ref()).unwrap_err();
     let msg = err.to_string();
     assert!(
         msg.contains("moment-matching input covariance") && msg.contains("index 1"),
         "{msg}"
     );
     // Rounding below an exactly zero variance is not an error, and neither is a propagated
-    // variance a little below 0 against the kernel's length-scales (a nearly deterministic
-    // state: the own-system example's 6 updates reach 3.3e-5 ℓ²).
-    let l2 = (2.0 * gp.hyp()[0].log_ls[1]).exp();
-    for small in [-1e-17, -3.3e-5 * l2] {
-        let s = Mat::from_fn(2, 2, |i, j| match (i, j) {
-            (0, 0) => 0.1,
-            (1, 1) => small,
-            _ => 0.0,
-        });
-        assert!(forward(&mm, &[0.0, 0.0], s.as_ref()).is_ok(), "{small}");
+    // variance a little below 0 against the input's scale (a nearly deterministic state: the
+    // own-system example's 6 updates reach 7e-5 of it). Beyond 1e-3 of the smaller length-scale
+    // (0.25e-3, not the larger's 4e-3) it is refused.
+    for (v, ok) in [(-1e-17, true), (-2e-4, true), (-3e-4, false)] {
+        let result = forward(&mm, &[0.0, 0.0], s_with(v).as_ref());
+        assert_eq!(result.is_ok(), ok, "{v}: {result:?}");
     }
-    let s = Mat::from_fn(2, 2, |i, j| match (i, j) {
-        (0, 0) => 0.1,
-        (1, 1) => -2e-3 * l2,
-        _ => 0.0,
-    });
-    assert!(forward(&mm, &[0.0, 0.0], s.as_ref()).is_err());
+    // A length-scale far beyond the data (an input the outputs ignore) does not widen what
+    // passes beyond the data's own spread along the input (centres' variance ~1, not ℓ² = 1e4).
+    let gp = GpModel::new(x, y, vec![hyper(100.0), hyper(100.0)]).unwrap();
+    let mm = MmModel::with_uncertainty(&gp);
+    assert!(forward(&mm, &[0.0, 0.0], s_with(-0.01).as_ref()).is_err());
 }
 
 /// `MmModel`'s fields are public, so a hand-built model whose parts disagree in shape is
