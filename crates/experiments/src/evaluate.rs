@@ -148,10 +148,7 @@ fn each_update<P: Policy + Clone + Sync>(
         .into_iter()
         .find(|p| p.exists())
     {
-        return Err(ExperimentError::Io {
-            path: taken.clone(),
-            source: std::io::ErrorKind::AlreadyExists.into(),
-        });
+        return Err(crate::record::already_exists(taken));
     }
     let mut file = crate::record::create_new(&opts.run.out)?;
     let mut policy = setup.policy.clone();

@@ -568,6 +568,8 @@ where
     let mut summary = match &checkpoint {
         Some(c) => Summary {
             config: meta.config.clone(),
+            // A run recorded under an alias continues under the name it stands for.
+            experiment: name.to_string(),
             ..c.summary.clone()
         },
         None => Summary::new(

@@ -32,7 +32,8 @@ pub const CHECKPOINT_FORMAT: u32 = 1;
 pub struct Checkpoint {
     /// Layout version, [`CHECKPOINT_FORMAT`] when written; reading refuses any other.
     pub format: u32,
-    /// The experiment name the run was started with; a resume under another is refused.
+    /// The experiment's name (the one an alias stands for, [`crate::config::canonical`]); a
+    /// resume under another is refused.
     pub experiment: String,
     /// The run's master seed; a resume with another is refused.
     pub seed: u64,
@@ -168,11 +169,12 @@ pub(crate) fn refuse_recorded_run(dir: &Path) -> Result<(), ExperimentError> {
             dir: dir.to_path_buf(),
             file,
             held: read_checkpoint_unchecked(dir).map_or("a run".into(), |cp| {
+                let done = cp.summary.episodes.len();
                 format!(
-                    "a run of `{}`, seed {}, {} updates done",
+                    "a run of `{}`, seed {}, {done} update{} done",
                     cp.experiment,
                     cp.seed,
-                    cp.summary.episodes.len()
+                    if done == 1 { "" } else { "s" }
                 )
             }),
         }),
@@ -273,16 +275,19 @@ pub fn read_checkpoint_unchecked(dir: &Path) -> Result<Checkpoint, ExperimentErr
             let name = dir
                 .file_name()
                 .map_or("run".into(), |n| n.to_string_lossy().into_owned());
+            // A directory of its own, made by a mkdir that fails rather than unpack over a
+            // run there (runs/<name> is a fresh run's default directory).
             format!(
-                "no checkpoint ({e}); {} is a stored run, to be unpacked first: mkdir -p \
-                 runs/{name} && tar -C runs/{name} -xJf {}, then give runs/{name}",
+                "no checkpoint ({e}); {} is a stored run, to be unpacked first: mkdir \
+                 runs/stored-{name} && tar -C runs/stored-{name} -xJf {}, then give \
+                 runs/stored-{name}",
                 dir.display(),
                 archive.display()
             )
         } else {
             format!(
-                "no checkpoint ({e}): not a run directory, or its run stopped before the \
-                 first update"
+                "no checkpoint ({e}): not a run directory, or its run stopped during its \
+                 initial roll-out"
             )
         })
     })?;
@@ -311,13 +316,21 @@ pub(crate) fn create_new(path: &Path) -> Result<std::fs::File, ExperimentError> 
         .create_new(true)
         .open(path)
         .map_err(|e| match e.kind() {
-            std::io::ErrorKind::AlreadyExists => io_err(std::io::Error::new(
-                e.kind(),
-                "already exists, and a result written earlier is not overwritten: give another \
-                 --out, or delete it",
-            )),
+            std::io::ErrorKind::AlreadyExists => already_exists(path),
             _ => io_err(e),
         })
+}
+
+/// The error for an output file that exists: a result written earlier is never overwritten.
+pub(crate) fn already_exists(path: &Path) -> ExperimentError {
+    ExperimentError::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::new(
+            std::io::ErrorKind::AlreadyExists,
+            "already exists, and a result written earlier is not overwritten: give another \
+             --out, or delete it",
+        ),
+    }
 }
 
 impl Recorder<'_> {

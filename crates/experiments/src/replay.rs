@@ -93,6 +93,8 @@ where
     }
     let agreed = replay.agreed;
     let mut summary = recorded.summary;
+    // A run recorded under an alias continues under the name it stands for.
+    summary.experiment = experiment.to_string();
     let recorded_returns = summary
         .episodes
         .iter()

@@ -129,7 +129,7 @@ pub const VERSION_TEXT: &str = concat!(
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Summary {
     /// The experiment's name: the one an alias stands for ([`crate::config::canonical`]; runs
-    /// before 2026-12-07 kept `vil-gic` as given).
+    /// made before 2026-12-07 and not continued since keep `vil-gic` as given).
     pub experiment: String,
     /// The run's master seed ([`crate::RunOptions::seed`]).
     pub seed: u64,

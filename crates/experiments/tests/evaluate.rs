@@ -112,7 +112,17 @@ fn what_evaluate_cannot_do_is_an_error_naming_why() {
     let base = scratch("errors");
     let run_dir = base.join("run");
     initial_only_run(&run_dir);
-    let message = |r: Result<_, ExperimentError>| r.map(|_| ()).unwrap_err().to_string();
+    // The error with its causes, as the CLI prints it.
+    let message = |r: Result<_, ExperimentError>| {
+        let e = r.map(|_| ()).unwrap_err();
+        let mut text = e.to_string();
+        let mut cause = std::error::Error::source(&e);
+        while let Some(c) = cause {
+            text.push_str(&format!(": {c}"));
+            cause = c.source();
+        }
+        text
+    };
 
     let beyond = EvaluateOptions {
         updates: Some(vec![0, 3]),
@@ -129,7 +139,7 @@ fn what_evaluate_cannot_do_is_an_error_naming_why() {
     evaluate("vilta-var", &options(&run_dir, out.clone())).unwrap();
     let m = message(evaluate("vilta-var", &options(&run_dir, out.clone())));
     assert!(
-        m.contains("once.jsonl"),
+        m.contains("once.jsonl") && m.contains("give another --out"),
         "an earlier result is not overwritten: {m}"
     );
     assert_eq!(common::json_lines(&out).len(), 1);
@@ -138,7 +148,10 @@ fn what_evaluate_cannot_do_is_an_error_naming_why() {
         "vilta-var",
         &options(&run_dir, base.join("table-taken.jsonl")),
     ));
-    assert!(m.contains("table-taken.md"), "{m}");
+    assert!(
+        m.contains("table-taken.md") && m.contains("give another --out"),
+        "{m}"
+    );
     assert!(
         !base.join("table-taken.jsonl").exists(),
         "nothing written beside a table that exists"

@@ -391,7 +391,13 @@ fn vil_gic_quick_run_writes_every_file_and_resumes_bit_for_bit() {
         .open(split.join("rollouts.jsonl"))
         .unwrap();
     std::io::Write::write_all(&mut rollouts, b"{\"costs\":[1.0,0.9").unwrap();
-    // Started as `vil-gic`, resumed as the name the alias stands for.
+    // A run recorded under the alias itself (as runs were before they recorded the name it
+    // stands for), resumed under that name: it continues, and records the name.
+    let checkpoint = split.join("checkpoint.json");
+    let mut cp: serde_json::Value = serde_json::from_str(&read(&checkpoint)).unwrap();
+    cp["experiment"] = "vil-gic".into();
+    cp["summary"]["experiment"] = "vil-gic".into();
+    std::fs::write(&checkpoint, cp.to_string()).unwrap();
     run("vil-gic-rbf10", &opts(&split, None, true), &mut ()).expect("resumed part");
 
     assert_eq!(
