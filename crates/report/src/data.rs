@@ -437,8 +437,10 @@ impl Run {
     /// A policy optimised over K > 1 start distributions has K predictions, and summary.json
     /// records the first's; the roll-out started from one state, so this is the prediction
     /// from the start nearest it ([`Prediction::start_nearest`]), summed from
-    /// predictions.jsonl's weighted step costs, with which start it is (k of K, from 0).
-    /// Runs with one start, or without that prediction, get summary.json's numbers.
+    /// predictions.jsonl's weighted step costs, with which start it is (k of K, from 0). Without
+    /// a recorded roll-out to compare, or without that start's step costs (older files), it is
+    /// the first start's, summary.json's, and says so. Runs with one start, or without that
+    /// prediction, get summary.json's numbers and no start.
     pub fn predicted_return(&self, e: &Episode) -> (f64, f64, Option<(usize, usize)>) {
         let recorded = (e.pred_mean, e.pred_std, None);
         let Some(p) = self
@@ -451,9 +453,6 @@ impl Run {
         };
         let k = p.start_nearest(self.rollout_of(e.index));
         let which = Some((k, p.starts.len()));
-        if k == 0 {
-            return (e.pred_mean, e.pred_std, which);
-        }
         let costs: Option<Vec<(f64, f64)>> = p.steps(k).iter().map(|s| s.weighted_cost).collect();
         match costs {
             Some(c) => (
@@ -461,7 +460,7 @@ impl Run {
                 c.iter().map(|c| c.1).sum(),
                 which,
             ),
-            None => recorded,
+            None => (e.pred_mean, e.pred_std, Some((0, p.starts.len()))),
         }
     }
 

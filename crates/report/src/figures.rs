@@ -76,7 +76,8 @@ pub(crate) fn draw_all(
             caption.push_str(&format!(
                 " The policy is optimised over {k} start distributions; the predicted return \
                  shown is the one from the start nearest the first roll-out's start (summed from \
-                 predictions.jsonl; summary.json records the first start's)."
+                 predictions.jsonl; the first start's, as summary.json records it, where the \
+                 roll-out or that start's step costs are not recorded)."
             ));
         }
         if let Some(u) = final_policy {

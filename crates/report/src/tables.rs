@@ -45,12 +45,12 @@ pub(crate) fn episodes(run: &Run) -> Table {
 
     let predicted: Vec<_> = eps.iter().map(|e| run.predicted_return(e)).collect();
     // With several start distributions the prediction beside the roll-out is its nearest
-    // start's, which the column names (k of K).
+    // start's where that can be told, and each cell names its start (k of K).
     let several_starts = predicted.iter().any(|p| p.2.is_some());
     let mut header = vec![
         "update",
         if several_starts {
-            "predicted from the nearest start (mean ± 1σ)"
+            "predicted (mean ± 1σ; start nearest the roll-out)"
         } else {
             "predicted (mean ± 1σ)"
         },

@@ -273,9 +273,9 @@ fn solved_at_says_what_solved_means_when_the_summary_records_the_streak() {
 fn a_k_start_run_sets_the_nearest_starts_prediction_beside_the_roll_out() {
     let tmp = TempDir::new("md-k-starts");
     write_run(tmp.path(), Kind::ViltaVar);
-    // Three starts: the recorded prediction moved 0.5 m off in y (first and third) and as
-    // recorded (second, with doubled costs so that its return differs from the summary's).
-    edit_lines(&tmp.path().join("predictions.jsonl"), |_, v| {
+    // Three starts: the recorded prediction as recorded at start (line % 3), with doubled costs
+    // so that its return differs from the summary's, and moved 0.5 m off in y at the others.
+    edit_lines(&tmp.path().join("predictions.jsonl"), |line, v| {
         let own = v["starts"][0].clone();
         let shifted = |dy: f64, cost_scale: f64| -> Value {
             let mut s = own.clone();
@@ -289,15 +289,20 @@ fn a_k_start_run_sets_the_nearest_starts_prediction_beside_the_roll_out() {
             }
             s
         };
-        v["starts"] = Value::Array(vec![
-            shifted(0.5, 1.0),
-            shifted(0.0, 2.0),
-            shifted(-0.5, 1.0),
-        ]);
+        let nearest = line % 3;
+        v["starts"] = (0..3)
+            .map(|k| {
+                if k == nearest {
+                    shifted(0.0, 2.0)
+                } else {
+                    shifted(0.5 * (k as f64 - 0.9), 1.0)
+                }
+            })
+            .collect();
     });
     write_report(tmp.path()).unwrap();
     let page = markdown(tmp.path());
-    assert!(page.contains("predicted from the nearest start (mean ± 1σ)"));
+    assert!(page.contains("predicted (mean ± 1σ; start nearest the roll-out)"));
     let predictions: Vec<Value> = std::fs::read_to_string(tmp.path().join("predictions.jsonl"))
         .unwrap()
         .lines()
@@ -307,13 +312,16 @@ fn a_k_start_run_sets_the_nearest_starts_prediction_beside_the_roll_out() {
         serde_json::from_str(&std::fs::read_to_string(tmp.path().join("summary.json")).unwrap())
             .unwrap();
     let rows = md_rows(&page, "## Policy updates");
+    let mut seen = std::collections::BTreeSet::new();
     for (row, e) in rows.iter().zip(summary["episodes"].as_array().unwrap()) {
-        let p = predictions
+        let line = predictions
             .iter()
-            .find(|p| p["episode"] == e["index"])
+            .position(|p| p["episode"] == e["index"])
             .unwrap();
+        let (p, nearest) = (&predictions[line], line % 3);
+        seen.insert(nearest);
         let sum = |key: &str| -> f64 {
-            p["starts"][1]
+            p["starts"][nearest]
                 .as_array()
                 .unwrap()
                 .iter()
@@ -325,7 +333,33 @@ fn a_k_start_run_sets_the_nearest_starts_prediction_beside_the_roll_out() {
             format!("{mean:.2}"),
             format!("{:.2}", e["predicted_return_mean"].as_f64().unwrap())
         );
-        assert_eq!(row[1], format!("{mean:.2} ± {std:.2} (start 2 of 3)"));
+        assert_eq!(
+            row[1],
+            format!("{mean:.2} ± {std:.2} (start {} of 3)", nearest + 1)
+        );
     }
+    assert_eq!(seen.len(), 3, "every start is the nearest somewhere");
     assert!(html(tmp.path()).contains("from the start nearest the first roll-out"));
+
+    // Older predictions without step costs: the first start's return, as summary.json has
+    // it, and the cell says which start that is.
+    edit_lines(&tmp.path().join("predictions.jsonl"), |_, v| {
+        for start in v["starts"].as_array_mut().unwrap() {
+            for step in start.as_array_mut().unwrap() {
+                let step = step.as_object_mut().unwrap();
+                step.remove("weighted_cost_mean");
+                step.remove("weighted_cost_std");
+            }
+        }
+    });
+    write_report(tmp.path()).unwrap();
+    let page = markdown(tmp.path());
+    let rows = md_rows(&page, "## Policy updates");
+    for (row, e) in rows.iter().zip(summary["episodes"].as_array().unwrap()) {
+        let (mean, std) = (
+            e["predicted_return_mean"].as_f64().unwrap(),
+            e["predicted_return_std"].as_f64().unwrap(),
+        );
+        assert_eq!(row[1], format!("{mean:.2} ± {std:.2} (start 1 of 3)"));
+    }
 }
