@@ -117,12 +117,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .expect("valid template"),
     );
     if args.resume {
-        // Said before the first new update, which may be minutes away; a checkpoint that
-        // cannot be read is the run's own error to report.
-        if let Ok(cp) = vicpilco_experiments::record::read_checkpoint_unchecked(&out) {
+        // Said before the first new update, which may be minutes away. Only for this run's own
+        // checkpoint: one that cannot be read, or another run's, is refused next with the reason.
+        let canonical = vicpilco_experiments::config::canonical;
+        let ours = vicpilco_experiments::record::read_checkpoint_unchecked(&out)
+            .ok()
+            .filter(|cp| {
+                canonical(&cp.experiment) == canonical(&args.name) && cp.seed == args.seed
+            });
+        if let Some(cp) = ours {
             let done = cp.summary.episodes.len();
             println!("resuming {}: {done} of {total} updates done", out.display());
             bar.set_position(done as u64);
+            // The jump from 0 is not progress made in no time.
+            bar.reset_eta();
         }
     }
     let mut progress = Progress {
