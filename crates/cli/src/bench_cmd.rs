@@ -6,7 +6,7 @@ pub struct Args {
     /// Workload name (only `w1` exists).
     workload: String,
     /// Workload file [default: w1.json in `VICPILCO_BENCH_DIR`, else in ../shared/bench beside
-    /// the repository, as `cargo bench` reads it].
+    /// the repository this binary was built from, as `cargo bench` reads it].
     #[arg(long)]
     file: Option<PathBuf>,
     /// Timed repetitions after one warm-up call (the median is reported).

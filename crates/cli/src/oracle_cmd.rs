@@ -5,7 +5,8 @@ use std::process::ExitCode;
 #[derive(clap::Args)]
 pub struct Args {
     /// Directory holding the oracle case folders [default: `VICPILCO_ORACLE_DIR`, else
-    /// ../shared/oracle beside the repository, as the tests read it].
+    /// ../shared/oracle beside the repository this binary was built from, as the tests read
+    /// it].
     #[arg(long)]
     dir: Option<PathBuf>,
     /// Print `{"kinds": {"<kind>": {"cases", "passed", "max_rel_err"}}}` instead of a table.

@@ -30,8 +30,13 @@ impl RecordedRun {
     }
 
     /// Where a command's JSON lines go when no `--out` is given:
-    /// `runs/<name>-seed<S>-<what>.jsonl`.
+    /// `runs/<name>-seed<S>-<what>.jsonl`, or `runs/<name>-quick-seed<S>-<what>.jsonl` with
+    /// `--quick` (as `run --quick` keeps its directory apart from the full run's).
     pub fn default_out(&self, what: &str) -> PathBuf {
-        PathBuf::from(format!("runs/{}-seed{}-{what}.jsonl", self.name, self.seed))
+        let quick = if self.quick { "-quick" } else { "" };
+        PathBuf::from(format!(
+            "runs/{}{quick}-seed{}-{what}.jsonl",
+            self.name, self.seed
+        ))
     }
 }
