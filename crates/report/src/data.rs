@@ -121,6 +121,9 @@ pub(crate) struct Summary {
     pub start_y_range: Option<(f64, f64)>,
     /// `config.dt`, the fallback time step when there is no predictions.jsonl.
     pub config_dt: Option<f64>,
+    /// `config.episodes`, the policy updates the run was asked for (absent in runs whose
+    /// config does not record it): a run with fewer has not ended.
+    pub config_episodes: Option<u64>,
     pub thesis_reference: Option<Vec<Claim>>,
     /// Arm runs: mean (k_x, k_y) of the last roll-out over the whole episode.
     pub final_mean_gains: Option<[f64; 2]>,
@@ -170,6 +173,9 @@ impl Summary {
                 (k + 1).saturating_sub(n)
             ),
             (Some(k), _, None) => format!("update {k}"),
+            (None, false, Some(n)) if self.config_episodes > Some(self.episodes.len() as u64) => {
+                format!("not yet ({n} successive updates whose first roll-out succeeds)")
+            }
             (None, false, Some(n)) => {
                 format!("not solved (never {n} successive updates whose first roll-out succeeds)")
             }

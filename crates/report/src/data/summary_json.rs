@@ -7,12 +7,13 @@ use serde_json::Value;
 
 pub(super) fn parse_summary(n: Node<'_>) -> Result<Summary, ReportError> {
     let episodes = n.req("episodes", |e| e.map_array(parse_episode))?;
-    let (geometry, start_y_range, config_dt) = n.with("config", |c| match c {
-        None => Ok((None, None, None)),
+    let (geometry, start_y_range, config_dt, config_episodes) = n.with("config", |c| match c {
+        None => Ok((None, None, None, None)),
         Some(c) => Ok((
             c.with("geometry", |g| g.map(parse_geometry).transpose())?,
             c.with("start_y_range", |r| r.map(parse_interval).transpose())?,
             c.opt_f64("dt")?,
+            c.opt_u64("episodes")?,
         )),
     })?;
     Ok(Summary {
@@ -33,6 +34,7 @@ pub(super) fn parse_summary(n: Node<'_>) -> Result<Summary, ReportError> {
         geometry,
         start_y_range,
         config_dt,
+        config_episodes,
         thesis_reference: n.with("thesis_reference", |t| {
             t.map(|t| t.map_array(parse_claim)).transpose()
         })?,

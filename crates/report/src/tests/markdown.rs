@@ -258,6 +258,15 @@ fn solved_at_says_what_solved_means_when_the_summary_records_the_streak() {
         solved(tmp.path()),
         "not solved (never 3 successive updates whose first roll-out succeeds)"
     );
+    // A run asked for more updates than it has done has not ended: not solved yet.
+    edit_json(&tmp.path().join("summary.json"), |s| {
+        let done = s["episodes"].as_array().unwrap().len();
+        s["config"]["episodes"] = (done + 1).into();
+    });
+    assert_eq!(
+        solved(tmp.path()),
+        "not yet (3 successive updates whose first roll-out succeeds)"
+    );
     // Summaries written before the streak was recorded say only the update.
     edit_json(&tmp.path().join("summary.json"), |s| {
         s["solved_at_episode"] = 6.into();
