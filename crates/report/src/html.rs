@@ -187,6 +187,17 @@ fn settings(h: &mut String, config: Option<&Value>) {
     if let Some(c) = config {
         flatten("", c, &mut rows);
     }
+    // A summary adds keys derived from the settings beside them (`start_y_range` for
+    // `start.y_range`); one that only repeats its setting is shown once, as the setting.
+    let repeats = |(k, v): &(String, String)| {
+        !k.contains('.')
+            && rows
+                .iter()
+                .any(|(k2, v2)| k2.contains('.') && k2.replace('.', "_") == *k && v2 == v)
+    };
+    let repeated: Vec<bool> = rows.iter().map(repeats).collect();
+    let mut keep = repeated.iter().map(|r| !r);
+    rows.retain(|_| keep.next().unwrap_or(true));
     if rows.is_empty() {
         h.push_str("<p>summary.json has no config.</p>\n");
         return;

@@ -124,7 +124,15 @@ fn vilta_var_adds_final_eval_and_yellow_updates() {
     assert!(files.notes.is_empty(), "{:?}", files.notes);
     let page = html(tmp.path());
     assert!(page.contains("swatch yellow"));
-    assert!(page.contains("start_y_range"));
+    // The start interval is listed once, as the setting; the summary's derived copy of it is not.
+    assert!(
+        page.contains("<td>start.y_range</td>"),
+        "settings list the interval"
+    );
+    assert!(
+        !page.contains("<td>start_y_range</td>"),
+        "and not its derived copy"
+    );
     // Yellow updates get the success-fraction column.
     assert!(page.contains("<th>success fraction</th>"));
 

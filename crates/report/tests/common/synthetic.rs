@@ -377,6 +377,8 @@ pub fn write_run(dir: &Path, kind: Kind) {
         });
     }
     if kind == Kind::ViltaVar {
+        // As a run records it: the setting, and the derived key beside it.
+        config["start"] = json!({"y_range": [0.1, 0.3]});
         config["start_y_range"] = json!([0.1, 0.3]);
     }
     let experiment = match kind {
