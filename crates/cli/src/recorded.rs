@@ -1,6 +1,14 @@
 use std::path::PathBuf;
 use vicpilco_experiments::RecordedRunOptions;
 
+/// The default name of a run's directory under `runs/`: `<name>-seed<S>`, or
+/// `<name>-quick-seed<S>` for a `--quick` run, which so never meets a full run's directory.
+/// The commands that read a recorded run name their outputs after it.
+pub fn default_run_name(name: &str, seed: u64, quick: bool) -> String {
+    let quick = if quick { "-quick" } else { "" };
+    format!("{name}{quick}-seed{seed}")
+}
+
 /// The recorded arm run a command reads (`rescore`, `evaluate`).
 #[derive(clap::Args)]
 pub struct RecordedRun {
@@ -33,10 +41,9 @@ impl RecordedRun {
     /// `runs/<name>-seed<S>-<what>.jsonl`, or `runs/<name>-quick-seed<S>-<what>.jsonl` with
     /// `--quick` (as `run --quick` keeps its directory apart from the full run's).
     pub fn default_out(&self, what: &str) -> PathBuf {
-        let quick = if self.quick { "-quick" } else { "" };
         PathBuf::from(format!(
-            "runs/{}{quick}-seed{}-{what}.jsonl",
-            self.name, self.seed
+            "runs/{}-{what}.jsonl",
+            default_run_name(&self.name, self.seed, self.quick)
         ))
     }
 }

@@ -96,10 +96,11 @@ impl LoopObserver for Progress {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let quick = if args.quick { "-quick" } else { "" };
-    let out = args
-        .out
-        .unwrap_or_else(|| PathBuf::from(format!("runs/{}{quick}-seed{}", args.name, args.seed)));
+    let out = args.out.unwrap_or_else(|| {
+        PathBuf::from("runs").join(crate::recorded::default_run_name(
+            &args.name, args.seed, args.quick,
+        ))
+    });
     let opts = vicpilco_experiments::RunOptions {
         seed: args.seed,
         out: out.clone(),
