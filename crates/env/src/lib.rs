@@ -5,8 +5,9 @@
 //!   state and the per-episode noise seed, the environment runs one learning step of `dt()`
 //!   seconds per [`Environment::step`] and returns the (noisy) observation plus diagnostics.
 //! * [`arm`]: the planar 3-DOF arm of the thesis (§5-2) under simple (SIC) or general (GIC)
-//!   Cartesian impedance control (or none, `off`, for tests of the plant), pushing a point peg against a stiff wall, into a 5 mm hole
-//!   and against an insertion spring. See `crates/env/README.md` for every parameter.
+//!   Cartesian impedance control (or none, `off`, for tests of the plant), pushing a point peg
+//!   against a stiff wall, into a 5 mm hole and against an insertion spring. See
+//!   `crates/env/README.md` for every parameter.
 //! * [`classic`]: PILCO's pendulum and cart-pole swing-up benchmarks with the constants of
 //!   its published scenarios, integrated by RK4 under zero-order hold.
 //! * [`font`]: the font embedded for every plot (the simulator's and the report's).

@@ -195,9 +195,7 @@ fn settings(h: &mut String, config: Option<&Value>) {
                 .iter()
                 .any(|(k2, v2)| k2.contains('.') && k2.replace('.', "_") == *k && v2 == v)
     };
-    let repeated: Vec<bool> = rows.iter().map(repeats).collect();
-    let mut keep = repeated.iter().map(|r| !r);
-    rows.retain(|_| keep.next().unwrap_or(true));
+    let rows: Vec<(String, String)> = rows.iter().filter(|r| !repeats(r)).cloned().collect();
     if rows.is_empty() {
         h.push_str("<p>summary.json has no config.</p>\n");
         return;
