@@ -2,6 +2,7 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use vicpilco_learn::record::{EpisodeRecord, LoopObserver, Phase};
+use vicpilco_learn::value::ValueOut;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -43,6 +44,10 @@ pub struct Args {
 struct Progress {
     bar: ProgressBar,
     last_j: f64,
+    /// Start distributions of the latest prediction: with K > 1 (vilta-var) the record's
+    /// predicted return is the first start's, and the line must say so (the report sets the
+    /// start nearest the roll-out beside it instead).
+    prediction_starts: usize,
 }
 
 impl LoopObserver for Progress {
@@ -61,6 +66,9 @@ impl LoopObserver for Progress {
         self.bar
             .set_message(format!("episode {episode}: optimise policy, J = {j:.3}"));
     }
+    fn predicted(&mut self, _episode: usize, prediction: &ValueOut) {
+        self.prediction_starts = prediction.trajectories.len();
+    }
     fn episode_done(&mut self, r: &EpisodeRecord) {
         self.bar.set_position(r.index as u64);
         let outcome = if r.rollouts > 1 {
@@ -74,8 +82,12 @@ impl LoopObserver for Progress {
         } else {
             "no success".to_string()
         };
+        let which_start = match self.prediction_starts {
+            k if k > 1 => format!(" (start 1 of {k})"),
+            _ => String::new(),
+        };
         let line = format!(
-            "episode {:>2}: predicted {:.2} ± {:.2}, recorded {:.2}, {} (train {:.1} s, {} cold restarts kept, optimise {:.1} s, {} evaluations)",
+            "episode {:>2}: predicted{which_start} {:.2} ± {:.2}, recorded {:.2}, {} (train {:.1} s, {} cold restarts kept, optimise {:.1} s, {} evaluations)",
             r.index,
             r.predicted_return_mean,
             r.predicted_return_std,
@@ -137,6 +149,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut progress = Progress {
         bar,
         last_j: f64::NAN,
+        prediction_starts: 1,
     };
     let summary = vicpilco_experiments::run(&args.name, &opts, &mut progress)
         .with_context(|| format!("running `{}`", args.name))?;
