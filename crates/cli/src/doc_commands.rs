@@ -14,6 +14,7 @@ const DOCS: &[&str] = &[
     "EXPERIMENTS.md",
     "BENCHMARKS.md",
     "ARCHITECTURE.md",
+    "THESIS.md",
     "probes/README.md",
     "results/README.md",
     "crates/env/README.md",
