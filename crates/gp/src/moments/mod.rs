@@ -1,7 +1,7 @@
 //! # Moment matching at an uncertain input
 //!
 //! For a GP with E outputs and a Gaussian test input `x ~ N(m, s)` (D-dimensional), this
-//! module computes exactly (Deisenroth 2010; thesis §3, eq. 3-x "moment matching"):
+//! module computes exactly (Deisenroth 2010; thesis §3-3-4, eqs. 3-16–3-18):
 //!
 //! * the predictive mean `M_a = Σ_i β_ai q_ai`, with
 //!   `q_ai = σ_fa² |sΛ_a⁻¹ + I|^{-1/2} exp(-½ ν_iᵀ (s+Λ_a)⁻¹ ν_i)` and `ν_i = x_i − m`;
