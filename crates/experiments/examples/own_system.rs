@@ -310,6 +310,7 @@ fn problem(updates: usize, length: u64, seed: u64) -> Result<LoopSetup<RbfPolicy
             memory: LBFGS_MEMORY,
             wolfe: Wolfe::PILCO,
             scale_params: None,
+            max_slope_ratio: None,
         },
         initial_rollouts: 1,
         episodes: updates,

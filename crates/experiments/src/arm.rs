@@ -510,6 +510,7 @@ pub fn setup<P>(
                 .optimiser
                 .scale_params
                 .then(|| cfg.optimiser.centre_scale.unwrap_or_default()),
+            max_slope_ratio: cfg.optimiser.msr,
         },
         initial_rollouts: 1,
         episodes: cfg.episodes,

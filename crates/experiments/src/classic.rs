@@ -165,6 +165,8 @@ where
             wolfe: Wolfe::PILCO,
             // PILCO's scenarios are in units where the raw parameters are well scaled.
             scale_params: None,
+            // Off, as when the stored swing-up tables were measured (PILCO's own is 100).
+            max_slope_ratio: None,
         },
         initial_rollouts: scn.initial_rollouts,
         episodes: scn.policy_updates,

@@ -338,6 +338,7 @@ mod tests {
             optimise_s: 1.0,
             evaluations: 10,
             line_searches: 5,
+            slope_capped: None,
             termination: "test".into(),
             objective_start: 2.0,
             objective_end: 1.0,

@@ -233,6 +233,25 @@ fn out_of_range_values_are_errors_naming_the_key() {
 }
 
 #[test]
+fn the_maximum_slope_ratio_parses_reaches_the_optimiser_and_must_be_positive() {
+    // Table 5-4's MSR = 100 exists as `optimiser.msr`; the shipped files leave it off, as
+    // every stored run was made (README, the table of keys in no shipped file).
+    for (name, _) in CONFIGS {
+        assert_eq!(shipped(name).optimiser.msr, None, "{name}");
+    }
+    let text = config::shipped("vil-gic").unwrap().1;
+    let with = |msr: &str| text.replace("memory = 10 ", &format!("msr = {msr}\nmemory = 10 "));
+    let cfg = config::parse(&with("100"), "test.toml").unwrap();
+    assert_eq!(cfg.optimiser.msr, Some(100.0));
+    let (setup, _) = arm::setup(&cfg, arm::rbf_policy(&cfg, 1).unwrap(), 1).unwrap();
+    assert_eq!(setup.optimiser.max_slope_ratio, Some(100.0));
+    for bad in ["0", "-1.0", "nan"] {
+        let e = error_of(&with(bad));
+        assert!(e.contains("optimiser.msr"), "{bad}: {e}");
+    }
+}
+
+#[test]
 fn the_centre_scale_rule_parses_and_needs_scaled_parameters() {
     use vicpilco_experiments::config::CentreScale;
     let text = config::shipped("vil-gic").unwrap().1;

@@ -90,6 +90,8 @@ impl TrainOptions {
             memory: self.memory,
             max_line_search_evals: None,
             wolfe: Wolfe::LOOSE,
+            // The training's iteration budget is not PILCO's line-search count: no cap.
+            max_slope_ratio: None,
         }
     }
 }

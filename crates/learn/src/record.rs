@@ -78,6 +78,10 @@ pub struct EpisodeRecord {
     /// L-BFGS iterations (one line search each), at most
     /// [`crate::outer::OptimiserOptions::length`].
     pub line_searches: u64,
+    /// Line searches whose first trial step PILCO's maximum slope ratio shortened
+    /// ([`crate::outer::OptimiserOptions::max_slope_ratio`]); `None` when the rule was off.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slope_capped: Option<usize>,
     /// Why the optimiser stopped: `gradient norm`, `relative change`,
     /// `line-search budget (Length)` or `line search failed: …`.
     pub termination: String,

@@ -102,6 +102,7 @@ fn setup(initial_rollouts: usize, episodes: usize) -> LoopSetup<LinearPolicy> {
             memory: 5,
             wolfe: Wolfe::PILCO,
             scale_params: None,
+            max_slope_ratio: None,
         },
         initial_rollouts,
         episodes,

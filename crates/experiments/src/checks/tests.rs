@@ -20,6 +20,7 @@ fn summary(returns: &[(f64, bool)]) -> Summary {
                 optimise_s: 10.0,
                 evaluations: 60,
                 line_searches: 50,
+                slope_capped: None,
                 termination: "test".into(),
                 objective_start: r,
                 objective_end: r,

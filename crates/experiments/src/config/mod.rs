@@ -237,6 +237,12 @@ pub struct OptimiserConfig {
     /// output dies").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub centre_scale: Option<CentreScale>,
+    /// PILCO's maximum slope ratio (Table 5-4's MSR = 100): each line search after the first
+    /// first tries a step whose predicted decrease is at most `msr` times the previous search's
+    /// achieved one (`vicpilco_gp::train::MinimizeOptions::max_slope_ratio`). Absent: no cap,
+    /// every line search first tries L-BFGS's step 1, as every stored run was made.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub msr: Option<f64>,
 }
 
 /// Where the relative targets' prior mean comes from.

@@ -224,6 +224,9 @@ impl ArmExperiment {
         c.at_least("optimiser.mfepls", o.mfepls as usize, 1)?;
         c.at_least("optimiser.memory", o.memory, 1)?;
         c.at_most("optimiser.memory", o.memory, MAX_LBFGS_MEMORY)?;
+        if let Some(msr) = o.msr {
+            c.positive("optimiser.msr", msr)?;
+        }
         if !o.scale_params || p.kind != PolicyKind::Rbf {
             c.forbid(
                 "optimiser.centre_scale",

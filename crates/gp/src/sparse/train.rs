@@ -214,6 +214,7 @@ pub fn train_inducing(
         memory: opts.memory,
         max_line_search_evals: None,
         wolfe: Wolfe::LOOSE,
+        max_slope_ratio: None,
     };
     let r = minimize(&mut f, x0, &mopts).ok_or_else(|| GpError::Numerical {
         what: "FITC nlml at the initial inducing inputs".into(),

@@ -13,6 +13,13 @@
 //!   objective handed to argmin is therefore scaled by `1/max(1, ‖∇f(x₀)‖)`, so the first trial
 //!   step has length ≤ 1. L-BFGS and the line search are invariant to this scale afterwards;
 //!   the stopping rules below are applied to the unscaled objective.
+//! * PILCO's maximum slope ratio (`minimize.m`'s MSR, [`MinimizeOptions::max_slope_ratio`]):
+//!   from the second line search on, the first trial step `α₀ = min(1, MSR · b·s_prev / s)`, so
+//!   the first-order decrease `α₀ s` that a line search first tries is at most MSR times the
+//!   one the previous line search achieved (`b` its accepted step, `s = ∇fᵀd` the slopes).
+//!   L-BFGS's natural step 1 is kept otherwise. PILCO applies the same rule to its first line
+//!   search, where it reduces to a step of length min(‖∇f‖, 1/‖∇f‖); ours stays the scaled
+//!   step above, of length min(‖∇f‖, 1).
 //! * Stopping rules (the W1 bench rule): `‖∇f‖₂ ≤ grad_tol`, or the change of the objective in
 //!   one iteration `|f_k − f_{k−1}| ≤ rel_tol · max(|f_k|, |f_{k−1}|, 1)`, or `max_iters`.
 
@@ -24,6 +31,7 @@ use argmin::solver::linesearch::{LineSearch, MoreThuenteLineSearch};
 use argmin::solver::quasinewton::LBFGS;
 use serde::{Deserialize, Serialize};
 use std::cell::{Cell, RefCell};
+use std::rc::Rc;
 
 /// How many times a failed line search may restart the optimiser from the best point.
 pub const MAX_RESTARTS: usize = 2;
@@ -87,6 +95,10 @@ pub struct MinimizeOptions {
     pub max_line_search_evals: Option<u64>,
     /// Acceptance rule of the line search; must satisfy `0 < c1 < c2 < 1`.
     pub wolfe: Wolfe,
+    /// PILCO's maximum slope ratio (MSR, 100 in `minimize.m` and the thesis's Table 5-4): caps
+    /// each line search's first trial step as the module documentation says; `None`: every
+    /// line search first tries L-BFGS's step 1. Must be positive.
+    pub max_slope_ratio: Option<f64>,
 }
 
 /// Outcome of [`minimize`].
@@ -102,6 +114,8 @@ pub struct MinimizeResult {
     pub evaluations: usize,
     /// Why the last run (after any restarts) stopped.
     pub termination: Termination,
+    /// Line searches whose first trial step the maximum slope ratio shortened below 1.
+    pub slope_capped: usize,
 }
 
 /// One evaluated point: parameters, value, gradient.
@@ -159,7 +173,23 @@ impl<F: FnMut(&[f64]) -> Option<(f64, Vec<f64>)>> Gradient for Memo<'_, F> {
 type Ls = MoreThuenteLineSearch<Vec<f64>, Vec<f64>, f64>;
 type St = IterState<Vec<f64>, Vec<f64>, (), (), (), f64>;
 
-/// More–Thuente, stopped after a fixed number of trial points (PILCO's MFEPLS).
+/// Where the previous line search of one L-BFGS run started, in which direction, and its
+/// slope there: the next line search recovers the accepted step `b` from its own start.
+struct PreviousSearch {
+    start: Vec<f64>,
+    direction: Vec<f64>,
+    slope: f64,
+}
+
+/// What the line searches of one L-BFGS run share (argmin clones the line search for each).
+#[derive(Default)]
+struct SlopeMemory {
+    previous: RefCell<Option<PreviousSearch>>,
+    capped: Cell<usize>,
+}
+
+/// More–Thuente, stopped after a fixed number of trial points (PILCO's MFEPLS), with its first
+/// trial step capped by PILCO's maximum slope ratio.
 ///
 /// It also guards against a gap in argmin 0.11: when More–Thuente gives up (rounding
 /// prevents progress) it returns a state without a parameter vector, and argmin's L-BFGS then
@@ -170,10 +200,46 @@ struct BoundedLineSearch {
     inner: Ls,
     max_evals: Option<u64>,
     start: Option<(Vec<f64>, f64)>,
+    max_slope_ratio: Option<f64>,
+    direction: Option<Vec<f64>>,
+    memory: Rc<SlopeMemory>,
+}
+
+impl BoundedLineSearch {
+    /// PILCO's first trial step `min(1, MSR · b·s_prev / s)` for a search from `x0` with slope
+    /// `slope` along `direction`, and remember this search for the next one. `None` on the
+    /// first search of a run, without a ratio, or where the previous step cannot be recovered
+    /// (a search that went nowhere leaves PILCO's `b·s` as it was; ours falls back to 1).
+    fn first_step(&self, x0: &[f64], direction: &[f64], slope: f64) -> Option<f64> {
+        let ratio = self.max_slope_ratio?;
+        let previous = self.memory.previous.replace(Some(PreviousSearch {
+            start: x0.to_vec(),
+            direction: direction.to_vec(),
+            slope,
+        }))?;
+        slope_ratio_step(ratio, &previous, x0, slope)
+    }
+}
+
+/// `min(1, ratio · b·s_prev / s)`, with `b` the step from `previous.start` along
+/// `previous.direction` that reached `x0` (PILCO writes it `bs / min(bs, s / MSR)`); `None`
+/// where no positive step was made.
+fn slope_ratio_step(ratio: f64, previous: &PreviousSearch, x0: &[f64], slope: f64) -> Option<f64> {
+    let d2: f64 = previous.direction.iter().map(|v| v * v).sum();
+    let moved: f64 = x0
+        .iter()
+        .zip(&previous.start)
+        .zip(&previous.direction)
+        .map(|((x, p), d)| (x - p) * d)
+        .sum();
+    let step = moved / d2;
+    let alpha = ratio * step * previous.slope / slope;
+    (step > 0.0 && alpha.is_finite() && alpha > 0.0).then_some(alpha.min(1.0))
 }
 
 impl LineSearch<Vec<f64>, f64> for BoundedLineSearch {
     fn search_direction(&mut self, direction: Vec<f64>) {
+        self.direction = Some(direction.clone());
         self.inner.search_direction(direction)
     }
     fn initial_step_length(&mut self, step_length: f64) -> Result<(), argmin::core::Error> {
@@ -194,6 +260,17 @@ where
         state: St,
     ) -> Result<(St, Option<KV>), argmin::core::Error> {
         self.start = state.get_param().map(|p| (p.clone(), state.get_cost()));
+        if let (Some((x0, _)), Some(d), Some(g)) =
+            (&self.start, &self.direction, state.get_gradient())
+        {
+            let slope: f64 = g.iter().zip(d).map(|(g, d)| g * d).sum();
+            if let Some(alpha) = self.first_step(x0, d, slope) {
+                if alpha < 1.0 {
+                    self.memory.capped.set(self.memory.capped.get() + 1);
+                }
+                self.inner.initial_step_length(alpha)?;
+            }
+        }
         self.inner.init(problem, state)
     }
     fn next_iter(
@@ -273,8 +350,8 @@ where
 }
 
 /// Minimise `f` (returning value and gradient, or `None` where it cannot be evaluated) by
-/// L-BFGS from `x0`. Returns `None` when `f` fails at `x0` or `opts.wolfe` violates
-/// `0 < c1 < c2 < 1`.
+/// L-BFGS from `x0`. Returns `None` when `f` fails at `x0`, `opts.wolfe` violates
+/// `0 < c1 < c2 < 1` or `opts.max_slope_ratio` is not positive and finite.
 pub fn minimize<F>(f: &mut F, x0: Vec<f64>, opts: &MinimizeOptions) -> Option<MinimizeResult>
 where
     F: FnMut(&[f64]) -> Option<(f64, Vec<f64>)>,
@@ -282,9 +359,16 @@ where
     let finite = |r: Option<(f64, Vec<f64>)>| {
         r.filter(|(v, g)| v.is_finite() && g.iter().all(|a| a.is_finite()))
     };
+    if opts
+        .max_slope_ratio
+        .is_some_and(|r| !(r.is_finite() && r > 0.0))
+    {
+        return None;
+    }
     let (mut best_f, mut grad) = finite(f(&x0))?;
     let mut best_x = x0;
     let mut evaluations = 1;
+    let mut slope_capped = 0;
     let mut iterations = 0u64;
     let mut step_shrink = 1.0;
     let memo_evals = Cell::new(0usize);
@@ -296,6 +380,7 @@ where
             iterations,
             evaluations,
             termination: Termination::GradientNorm,
+            slope_capped,
         });
     }
     for restart in 0..=MAX_RESTARTS {
@@ -312,12 +397,17 @@ where
             last: RefCell::new(Some(seed)),
             evals: &memo_evals,
         };
+        // A restart begins with a fresh history, as PILCO's does after a failed search.
+        let memory = Rc::new(SlopeMemory::default());
         let linesearch = BoundedLineSearch {
             inner: MoreThuenteLineSearch::new()
                 .with_c(opts.wolfe.c1, opts.wolfe.c2)
                 .ok()?,
             max_evals: opts.max_line_search_evals,
             start: None,
+            max_slope_ratio: opts.max_slope_ratio,
+            direction: None,
+            memory: Rc::clone(&memory),
         };
         let inner = LBFGS::new(linesearch, opts.memory.max(1))
             .with_tolerance_grad(0.0)
@@ -346,11 +436,13 @@ where
                     iterations,
                     evaluations: evaluations + memo_evals.get(),
                     termination: Termination::LineSearchFailed(e.to_string()),
+                    slope_capped: slope_capped + memory.capped.get(),
                 })
             }
         };
         iterations += state.get_iter();
         evaluations += memo_evals.take();
+        slope_capped += memory.capped.get();
         let run_best = state.get_best_cost() / scale;
         if let Some(x) = state.take_best_param() {
             if run_best < best_f {
@@ -374,6 +466,7 @@ where
                 iterations,
                 evaluations,
                 termination,
+                slope_capped,
             });
         }
         // Restart from the best point with a fresh history and a shorter first step.
@@ -389,6 +482,7 @@ where
                 iterations,
                 evaluations,
                 termination: Termination::GradientNorm,
+                slope_capped,
             });
         }
         step_shrink *= 0.1;
@@ -419,6 +513,7 @@ mod tests {
             memory: 10,
             max_line_search_evals: None,
             wolfe: Wolfe::LOOSE,
+            max_slope_ratio: None,
         };
         let r = minimize(&mut rosenbrock, vec![-1.2, 1.0], &opts).unwrap();
         assert!(
@@ -438,6 +533,7 @@ mod tests {
                 memory: 10,
                 max_line_search_evals: None,
                 wolfe,
+                max_slope_ratio: None,
             };
             minimize(&mut rosenbrock, vec![-1.2, 1.0], &opts).unwrap()
         };
@@ -461,6 +557,7 @@ mod tests {
                 memory: 1,
                 max_line_search_evals: None,
                 wolfe: Wolfe::LOOSE,
+                max_slope_ratio: None,
             }
         };
         assert!(minimize(&mut rosenbrock, vec![0.0, 0.0], &bad).is_none());
@@ -481,6 +578,7 @@ mod tests {
             memory: 5,
             max_line_search_evals: None,
             wolfe: Wolfe::LOOSE,
+            max_slope_ratio: None,
         };
         let r = minimize(&mut f, vec![-10.0], &opts).unwrap();
         assert!((r.x[0] - 3.0).abs() < 1e-6, "{r:?}");
@@ -505,6 +603,7 @@ mod tests {
                 memory: 10,
                 max_line_search_evals: evals,
                 wolfe: Wolfe::PILCO,
+                max_slope_ratio: None,
             };
             let r = minimize(&mut counted, vec![-1.2, 1.0], &opts).unwrap();
             assert_eq!(r.evaluations, calls.get(), "{r:?}");
@@ -526,6 +625,7 @@ mod tests {
                 memory: 10,
                 max_line_search_evals: Some(25),
                 wolfe: Wolfe::PILCO,
+                max_slope_ratio: None,
             };
             let r = minimize(&mut f, vec![-1.2, 1.0], &opts).unwrap();
             assert!(
@@ -546,7 +646,73 @@ mod tests {
             memory: 5,
             max_line_search_evals: None,
             wolfe: Wolfe::LOOSE,
+            max_slope_ratio: None,
         };
         assert!(minimize(&mut f, vec![0.0], &opts).is_none());
+    }
+
+    #[test]
+    fn slope_ratio_step_is_pilcos_rule() {
+        // PILCO: a = bs / min(bs, s / MSR), with bs = b · s_prev (both slopes negative).
+        let pilco = |msr: f64, b: f64, s_prev: f64, s: f64| {
+            let bs = b * s_prev;
+            bs / bs.min(s / msr)
+        };
+        let previous = PreviousSearch {
+            start: vec![1.0, -2.0],
+            direction: vec![0.5, 0.25],
+            slope: -0.3,
+        };
+        for (msr, b, s) in [(100.0, 0.2, -1.0), (100.0, 0.2, -1e4), (10.0, 1e-3, -50.0)] {
+            let x0: Vec<f64> = previous
+                .start
+                .iter()
+                .zip(&previous.direction)
+                .map(|(p, d)| p + b * d)
+                .collect();
+            let ours = slope_ratio_step(msr, &previous, &x0, s).unwrap();
+            let theirs = pilco(msr, b, previous.slope, s);
+            assert!(
+                (ours - theirs).abs() <= 1e-12 * theirs,
+                "{ours} vs {theirs}"
+            );
+        }
+        // A search that went nowhere (or backwards) gives no cap.
+        assert_eq!(
+            slope_ratio_step(100.0, &previous, &previous.start, -1.0),
+            None
+        );
+    }
+
+    #[test]
+    fn the_slope_ratio_shortens_first_steps_only_when_it_binds() {
+        let opts = |max_slope_ratio| MinimizeOptions {
+            max_iters: 60,
+            grad_tol: 1e-10,
+            rel_tol: 0.0,
+            memory: 10,
+            max_line_search_evals: Some(25),
+            wolfe: Wolfe::PILCO,
+            max_slope_ratio,
+        };
+        let free = minimize(&mut rosenbrock, vec![-1.2, 1.0], &opts(None)).unwrap();
+        assert_eq!(free.slope_capped, 0);
+        // A ratio no step comes near: the same run, point for point.
+        let loose = minimize(&mut rosenbrock, vec![-1.2, 1.0], &opts(Some(1e12))).unwrap();
+        assert_eq!(loose.slope_capped, 0);
+        assert_eq!(
+            (loose.x.clone(), loose.evaluations),
+            (free.x.clone(), free.evaluations)
+        );
+        // A ratio below 1 caps every search after the first that made progress, and the
+        // minimiser still gets there.
+        let tight = minimize(&mut rosenbrock, vec![-1.2, 1.0], &opts(Some(0.5))).unwrap();
+        assert!(tight.slope_capped > 0, "{tight:?}");
+        assert!(
+            tight.value < 1e-3 * rosenbrock(&[-1.2, 1.0]).unwrap().0,
+            "{tight:?}"
+        );
+        assert!(minimize(&mut rosenbrock, vec![0.0, 0.0], &opts(Some(0.0))).is_none());
+        assert!(minimize(&mut rosenbrock, vec![0.0, 0.0], &opts(Some(f64::NAN))).is_none());
     }
 }

@@ -43,6 +43,12 @@ pub struct OptimiserOptions {
     /// taken at the start of each update (ours; `None`: PILCO's raw parameters). The
     /// objective is the same function; only the optimiser's steps change.
     pub scale_params: Option<CentreScale>,
+    /// "MSR": PILCO's maximum slope ratio, which caps each line search's first trial step
+    /// ([`MinimizeOptions::max_slope_ratio`]; 100 in PILCO and the thesis's Table 5-4).
+    /// `None`: every line search first tries L-BFGS's step 1, as runs made before
+    /// 2026-12-07 did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_slope_ratio: Option<f64>,
 }
 
 /// Exploration for the initial roll-outs: `(seed, t, observation) → action`.
@@ -421,6 +427,7 @@ where
                 memory: self.optimiser.memory,
                 max_line_search_evals: Some(self.optimiser.mfepls),
                 wolfe: self.optimiser.wolfe,
+                max_slope_ratio: self.optimiser.max_slope_ratio,
             };
             // The optimiser's first evaluation is at q0: it gets the one made above rather than
             // a second value+gradient pass over the horizon.
@@ -434,8 +441,8 @@ where
                 Some(cause) => cause,
                 None if start_finite => LearnError::Spec(format!(
                     "policy optimiser: the line search's Wolfe constants {:?} must satisfy \
-                     0 < c1 < c2 < 1",
-                    self.optimiser.wolfe
+                     0 < c1 < c2 < 1, and its maximum slope ratio {:?} must be positive",
+                    self.optimiser.wolfe, self.optimiser.max_slope_ratio
                 )),
                 None => LearnError::NonFinite(format!(
                     "the predicted return ({j_start}) or its gradient at the policy update \
@@ -496,6 +503,7 @@ where
                 optimise_s,
                 evaluations: result.evaluations,
                 line_searches: result.iterations,
+                slope_capped: self.optimiser.max_slope_ratio.map(|_| result.slope_capped),
                 termination: termination_text(&result.termination),
                 objective_start: j_start,
                 objective_end: result.value,

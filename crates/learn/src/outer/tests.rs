@@ -62,6 +62,7 @@ fn problem() -> (LoopSetup<LinearPolicy>, GpModel) {
             memory: 5,
             wolfe: Wolfe::PILCO,
             scale_params: None,
+            max_slope_ratio: None,
         },
         initial_rollouts: 1,
         episodes: 1,
