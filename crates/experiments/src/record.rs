@@ -12,7 +12,7 @@
 //!   far and the config it belongs to. Every random stream is derived from the master seed and
 //!   the episode, so no generator state is needed to continue bit for bit.
 
-use crate::summary::{colour, write_json_atomic, EpisodeSummary, Summary};
+use crate::summary::{colour, write_atomic, write_json_atomic, EpisodeSummary, Summary};
 use crate::{ExperimentError, RunOptions};
 use serde::{Deserialize, Serialize};
 use std::io::Write;
@@ -221,7 +221,9 @@ pub fn open_jsonl(path: &Path, keep_upto: Option<usize>) -> Result<std::fs::File
     if !text.is_empty() {
         text.push('\n');
     }
-    std::fs::write(path, text).map_err(io_err(path))?;
+    // Not truncated in place: a resume stopped before the kept lines were back would lose
+    // records its checkpoint covers, and the next resume would take the cut for a torn line.
+    write_atomic(path, text.as_bytes()).map_err(io_err(path))?;
     std::fs::OpenOptions::new()
         .append(true)
         .open(path)

@@ -304,20 +304,26 @@ impl Summary {
 /// Write pretty JSON to `path` through a temporary file in the same directory and a rename,
 /// so an interrupted write never leaves a truncated file.
 pub fn write_json_atomic(path: &Path, value: &serde_json::Value) -> Result<(), WriteError> {
-    let io = |e: std::io::Error| WriteError::Io {
+    let bytes = serde_json::to_vec_pretty(value)?;
+    write_atomic(path, &bytes).map_err(|e| WriteError::Io {
         path: path.display().to_string(),
         source: e,
-    };
-    let tmp = path.with_extension("json.tmp");
+    })
+}
+
+/// Write `bytes` to `path` through `<path>.tmp` and a rename: a process stopped at any moment
+/// leaves the old file or the new one whole, never one cut short.
+pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".tmp");
     {
         use std::io::Write;
-        let mut f = std::fs::File::create(&tmp).map_err(io)?;
-        f.write_all(&serde_json::to_vec_pretty(value)?)
-            .map_err(io)?;
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
         // The data must be on disk before the rename makes it the file.
-        f.sync_all().map_err(io)?;
+        f.sync_all()?;
     }
-    std::fs::rename(&tmp, path).map_err(io)
+    std::fs::rename(&tmp, path)
 }
 
 #[cfg(test)]
