@@ -28,6 +28,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant, SystemTime};
 
+use rand::rngs::ChaCha8Rng;
+use rand::{RngExt, SeedableRng};
+
 /// Few enough updates for one run to take seconds, enough for the records of several updates
 /// to be cut short and resumed from.
 const UPDATES: usize = 4;
@@ -66,17 +69,15 @@ fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
         .unwrap_or(default)
 }
 
-/// SplitMix64: kill moments reproducible from one seed without a dependency.
-struct Moments(u64);
+/// Kill moments, reproducible from one seed.
+struct Moments(ChaCha8Rng);
 
 impl Moments {
+    fn new(seed: u64) -> Self {
+        Moments(ChaCha8Rng::seed_from_u64(seed))
+    }
     fn unit(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
+        self.0.random()
     }
 }
 
@@ -162,9 +163,9 @@ fn modified(path: &Path) -> Option<SystemTime> {
 /// the checkpoint covers in place.
 #[test]
 fn a_resume_killed_while_trimming_the_records_keeps_them() {
-    let dir = std::env::temp_dir().join(format!("vicpilco-kill-trim-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let log = std::env::temp_dir().join(format!("vicpilco-kill-trim-{}", std::process::id()));
+    // Removed when the test ends, however it ends.
+    let scratch = tempfile::tempdir().unwrap();
+    let (dir, log) = (scratch.path().join("run"), scratch.path().join("log"));
     let run = |episodes: usize, resume: bool, fsize: Option<u64>| {
         start(&dir, episodes, resume, &log, fsize).wait().unwrap()
     };
@@ -185,10 +186,6 @@ fn a_resume_killed_while_trimming_the_records_keeps_them() {
     let rollouts = read(&dir.join("rollouts.jsonl"));
     let per_update: Vec<usize> = (0..3).map(|e| episodes_of(&rollouts, e)).collect();
     assert_eq!(per_update, [1, 1, 1], "roll-outs per update");
-    let _ = std::fs::remove_dir_all(&dir);
-    for ext in ["out", "err"] {
-        let _ = std::fs::remove_file(log.with_extension(ext));
-    }
 }
 
 /// The uninterrupted run, and when (from its start) each checkpoint appeared.
@@ -560,8 +557,9 @@ fn check_same_result(killed: &Path, reference: &Path) {
             --nocapture)"]
 fn a_run_killed_anywhere_resumes_to_the_uninterrupted_result() {
     let kills_wanted: usize = env_or("VICPILCO_KILLS", 20);
-    let mut moments = Moments(env_or("VICPILCO_KILL_SEED", 1));
-    let base = std::env::temp_dir().join(format!("vicpilco-kill-resume-{}", std::process::id()));
+    let mut moments = Moments::new(env_or("VICPILCO_KILL_SEED", 1));
+    let scratch = tempfile::tempdir().unwrap();
+    let base = scratch.path();
     let (reference, logs) = (base.join("full"), base.join("logs"));
     std::fs::create_dir_all(&logs).unwrap();
     let test_start = Instant::now();
@@ -607,5 +605,4 @@ fn a_run_killed_anywhere_resumes_to_the_uninterrupted_result() {
          {:.1} s in all",
         test_start.elapsed().as_secs_f64()
     );
-    let _ = std::fs::remove_dir_all(&base);
 }
