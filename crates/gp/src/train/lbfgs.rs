@@ -211,20 +211,28 @@ impl BoundedLineSearch {
     /// first search of a run, without a ratio, or where the previous step cannot be recovered
     /// (a search that went nowhere leaves PILCO's `b·s` as it was; ours falls back to 1).
     fn first_step(&self, x0: &[f64], direction: &[f64], slope: f64) -> Option<f64> {
-        let ratio = self.max_slope_ratio?;
+        let max_ratio = self.max_slope_ratio?;
         let previous = self.memory.previous.replace(Some(PreviousSearch {
             start: x0.to_vec(),
             direction: direction.to_vec(),
             slope,
         }))?;
-        slope_ratio_step(ratio, &previous, x0, slope)
+        let ratio = slope_ratio(&previous, x0, slope)?;
+        // How far each search is from the cap: `RUST_LOG=debug` shows whether a run's MSR binds.
+        tracing::debug!(
+            ratio,
+            max_ratio,
+            "line search's slope over the previous achieved decrease"
+        );
+        Some((max_ratio / ratio).min(1.0))
     }
 }
 
-/// `min(1, ratio · b·s_prev / s)`, with `b` the step from `previous.start` along
-/// `previous.direction` that reached `x0` (PILCO writes it `bs / min(bs, s / MSR)`); `None`
-/// where no positive step was made.
-fn slope_ratio_step(ratio: f64, previous: &PreviousSearch, x0: &[f64], slope: f64) -> Option<f64> {
+/// `s / (b·s_prev)`: the new search's slope over the first-order decrease the previous search
+/// achieved, `b` being its step from `previous.start` along `previous.direction` to `x0`. The
+/// first trial step is `min(1, MSR / ratio)` (PILCO writes it `bs / min(bs, s / MSR)` with
+/// `bs = b·s_prev`). `None` where no positive step was made.
+fn slope_ratio(previous: &PreviousSearch, x0: &[f64], slope: f64) -> Option<f64> {
     let d2: f64 = previous.direction.iter().map(|v| v * v).sum();
     let moved: f64 = x0
         .iter()
@@ -233,8 +241,8 @@ fn slope_ratio_step(ratio: f64, previous: &PreviousSearch, x0: &[f64], slope: f6
         .map(|((x, p), d)| (x - p) * d)
         .sum();
     let step = moved / d2;
-    let alpha = ratio * step * previous.slope / slope;
-    (step > 0.0 && alpha.is_finite() && alpha > 0.0).then_some(alpha.min(1.0))
+    let ratio = slope / (step * previous.slope);
+    (step > 0.0 && ratio.is_finite() && ratio > 0.0).then_some(ratio)
 }
 
 impl LineSearch<Vec<f64>, f64> for BoundedLineSearch {
@@ -652,7 +660,7 @@ mod tests {
     }
 
     #[test]
-    fn slope_ratio_step_is_pilcos_rule() {
+    fn the_capped_first_step_is_pilcos_rule() {
         // PILCO: a = bs / min(bs, s / MSR), with bs = b · s_prev (both slopes negative).
         let pilco = |msr: f64, b: f64, s_prev: f64, s: f64| {
             let bs = b * s_prev;
@@ -670,7 +678,7 @@ mod tests {
                 .zip(&previous.direction)
                 .map(|(p, d)| p + b * d)
                 .collect();
-            let ours = slope_ratio_step(msr, &previous, &x0, s).unwrap();
+            let ours = (msr / slope_ratio(&previous, &x0, s).unwrap()).min(1.0);
             let theirs = pilco(msr, b, previous.slope, s);
             assert!(
                 (ours - theirs).abs() <= 1e-12 * theirs,
@@ -678,10 +686,7 @@ mod tests {
             );
         }
         // A search that went nowhere (or backwards) gives no cap.
-        assert_eq!(
-            slope_ratio_step(100.0, &previous, &previous.start, -1.0),
-            None
-        );
+        assert_eq!(slope_ratio(&previous, &previous.start, -1.0), None);
     }
 
     #[test]
