@@ -81,7 +81,8 @@ where
             lines.push_str(&line.to_string());
             lines.push('\n');
         }
-        std::fs::write(&path, lines).map_err(|e| ExperimentError::Io { path, source: e })?;
+        vicpilco_report::atomic::write_atomic(&path, lines.as_bytes())
+            .map_err(|e| ExperimentError::Io { path, source: e })?;
         summary.final_eval = Some(FinalEval {
             starts: n_eval,
             successes,

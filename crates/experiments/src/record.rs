@@ -12,7 +12,7 @@
 //!   far and the config it belongs to. Every random stream is derived from the master seed and
 //!   the episode, so no generator state is needed to continue bit for bit.
 
-use crate::summary::{colour, write_atomic, write_json_atomic, EpisodeSummary, Summary};
+use crate::summary::{colour, write_json_atomic, EpisodeSummary, Summary};
 use crate::{ExperimentError, RunOptions};
 use serde::{Deserialize, Serialize};
 use std::io::Write;
@@ -21,6 +21,7 @@ use std::time::Instant;
 use vicpilco_learn::data::Rollout;
 use vicpilco_learn::record::{EpisodeRecord, LoopObserver, LoopState, Phase};
 use vicpilco_learn::value::ValueOut;
+use vicpilco_report::atomic::write_atomic;
 use vicpilco_report::difference::first_difference;
 use vicpilco_report::jsonl::parse_json_lines;
 
@@ -486,6 +487,24 @@ impl LoopObserver for Recorder<'_> {
         let path = self.dir.join("policies.jsonl");
         let result = Self::append(&mut self.policies, path, &line);
         self.keep(result);
+        // The checkpoint says these records exist: they reach the disk before it does, so a
+        // power cut (not only a killed process) cannot leave a checkpoint ahead of its records.
+        let synced: Vec<_> = [
+            (&self.rollouts, "rollouts.jsonl"),
+            (&self.predictions, "predictions.jsonl"),
+            (&self.policies, "policies.jsonl"),
+        ]
+        .into_iter()
+        .map(|(file, name)| {
+            file.sync_data().map_err(|e| ExperimentError::Io {
+                path: self.dir.join(name),
+                source: e,
+            })
+        })
+        .collect();
+        for result in synced {
+            self.keep(result);
+        }
         self.summary.wall_s = self.wall_s();
         let cp = Checkpoint {
             format: CHECKPOINT_FORMAT,

@@ -305,25 +305,10 @@ impl Summary {
 /// so an interrupted write never leaves a truncated file.
 pub fn write_json_atomic(path: &Path, value: &serde_json::Value) -> Result<(), WriteError> {
     let bytes = serde_json::to_vec_pretty(value)?;
-    write_atomic(path, &bytes).map_err(|e| WriteError::Io {
+    vicpilco_report::atomic::write_atomic(path, &bytes).map_err(|e| WriteError::Io {
         path: path.display().to_string(),
         source: e,
     })
-}
-
-/// Write `bytes` to `path` through `<path>.tmp` and a rename: a process stopped at any moment
-/// leaves the old file or the new one whole, never one cut short.
-pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    {
-        use std::io::Write;
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        // The data must be on disk before the rename makes it the file.
-        f.sync_all()?;
-    }
-    std::fs::rename(&tmp, path)
 }
 
 #[cfg(test)]

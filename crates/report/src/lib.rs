@@ -21,13 +21,15 @@
 //! [`acceptance_markdown`] reads the summary.json of several runs and tabulates each thesis claim
 //! over the seeds with its acceptance verdict (issue 6).
 //!
-//! Two modules serve the experiments crate too: [`jsonl`] reads and trims a run's JSON-lines
-//! records (resume, replay), and [`difference`] says where two settings records first differ
+//! Three modules serve the experiments crate too: [`jsonl`] reads and trims a run's JSON-lines
+//! records (resume, replay), [`atomic`] replaces a file whole (records, checkpoint, report), and
+//! [`difference`] says where two settings records first differ
 //! (resume, replay, recheck, acceptance).
 
 #![warn(missing_docs)]
 
 mod acceptance;
+pub mod atomic;
 mod data;
 pub mod difference;
 mod error;
@@ -84,7 +86,7 @@ pub fn write_report(dir: &Path) -> Result<ReportFiles, ReportError> {
 }
 
 fn write(file: &Path, text: String) -> Result<(), ReportError> {
-    std::fs::write(file, text).map_err(|error| ReportError::Write {
+    atomic::write_atomic(file, text.as_bytes()).map_err(|error| ReportError::Write {
         file: file.to_path_buf(),
         error,
     })

@@ -6,6 +6,7 @@ pub(crate) mod policy;
 pub(crate) mod prediction;
 pub(crate) mod returns;
 
+use crate::atomic::{finish, staging_path};
 use crate::ReportError;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
@@ -36,13 +37,21 @@ pub(crate) fn save(
         file: file.to_path_buf(),
         message: e.to_string(),
     };
+    // Drawn under a staging name and renamed: a run stopped mid-draw keeps the last whole plot.
+    let (png_draft, svg_draft) = (staging_path(&png), staging_path(&svg));
     render(
-        &BitMapBackend::new(&png, fig.size()).into_drawing_area(),
+        &BitMapBackend::new(&png_draft, fig.size()).into_drawing_area(),
         fig,
     )
     .map_err(|e| fail(&png, e))?;
-    render(&SVGBackend::new(&svg, fig.size()).into_drawing_area(), fig)
-        .map_err(|e| fail(&svg, e))?;
+    render(
+        &SVGBackend::new(&svg_draft, fig.size()).into_drawing_area(),
+        fig,
+    )
+    .map_err(|e| fail(&svg, e))?;
+    for file in [&png, &svg] {
+        finish(file).map_err(|e| fail(file, e.into()))?;
+    }
     Ok((png, svg))
 }
 
