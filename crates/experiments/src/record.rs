@@ -520,6 +520,20 @@ impl LoopObserver for Recorder<'_> {
                 write_json_atomic(&self.dir.join("checkpoint.json"), &v).map_err(Into::into)
             });
         self.keep(result);
+        if state.completed == 0 && self.summary.episodes.is_empty() {
+            // The first update can take minutes (vilta-var's about eight): the initial roll-out
+            // is summarised and reported now, so `vicpilco report` and a browser show it meanwhile.
+            self.summary.wall_s = self.wall_s();
+            if let Some(claims) = &self.claims {
+                self.summary.thesis_reference = claims(&self.summary);
+            }
+            let result = self.summary.write(&self.dir).map_err(ExperimentError::from);
+            self.keep(result);
+            let result = vicpilco_report::write_report(&self.dir)
+                .map(|_| ())
+                .map_err(Into::into);
+            self.keep(result);
+        }
         self.inner.checkpoint(state)
     }
 }

@@ -149,6 +149,36 @@ fn pendulum_two_updates_write_a_reproducible_summary() {
 /// A run stopped during its initial roll-out leaves `rollouts.jsonl` alone; a fresh run there
 /// refuses too, naming it, as does a replay into it.
 #[test]
+fn the_initial_roll_out_is_summarised_and_reported_before_the_first_update() {
+    use vicpilco_learn::record::{LoopObserver, Phase};
+    struct AtFirstUpdate<'a>(&'a std::path::Path, bool);
+    impl LoopObserver for AtFirstUpdate<'_> {
+        fn phase(&mut self, episode: usize, phase: Phase) {
+            if (episode, phase) != (1, Phase::Train) {
+                return;
+            }
+            let text = std::fs::read_to_string(self.0.join("summary.json"))
+                .expect("summary.json written after the initial roll-out");
+            let summary: Summary = serde_json::from_str(&text).unwrap();
+            assert!(summary.episodes.is_empty(), "{summary:?}");
+            assert!(summary.initial_return.is_some_and(f64::is_finite));
+            assert!(self.0.join("report.html").is_file());
+            self.1 = true;
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let opts = RunOptions {
+        seed: 3,
+        out: dir.path().to_path_buf(),
+        episodes: Some(1),
+        ..Default::default()
+    };
+    let mut observer = AtFirstUpdate(dir.path(), false);
+    run("pendulum", &opts, &mut observer).expect("pendulum run");
+    assert!(observer.1, "update 1 never began training");
+}
+
+#[test]
 fn a_directory_with_any_record_file_is_not_started_over() {
     let dir = std::env::temp_dir().join(format!("vicpilco-partial-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
