@@ -358,6 +358,21 @@ impl Recorder<'_> {
             .map_err(|e| ExperimentError::Io { path, source: e })
     }
 
+    /// summary.json with the time and claims so far, then the report: the report follows the
+    /// run, so a long run can be watched in a browser.
+    fn write_summary_and_report(&mut self) {
+        self.summary.wall_s = self.wall_s();
+        if let Some(claims) = &self.claims {
+            self.summary.thesis_reference = claims(&self.summary);
+        }
+        let result = self.summary.write(&self.dir).map_err(ExperimentError::from);
+        self.keep(result);
+        let result = vicpilco_report::write_report(&self.dir)
+            .map(|_| ())
+            .map_err(Into::into);
+        self.keep(result);
+    }
+
     /// `wall_s` of the run so far, earlier sessions included.
     pub fn wall_s(&self) -> f64 {
         self.wall_before + self.started.elapsed().as_secs_f64()
@@ -468,17 +483,7 @@ impl LoopObserver for Recorder<'_> {
             start_y: extras.map(|e| e.2),
         });
         self.summary.update_solved();
-        self.summary.wall_s = self.wall_s();
-        if let Some(claims) = &self.claims {
-            self.summary.thesis_reference = claims(&self.summary);
-        }
-        let result = self.summary.write(&self.dir).map_err(ExperimentError::from);
-        self.keep(result);
-        // The report follows the run, so a long run can be watched in a browser.
-        let result = vicpilco_report::write_report(&self.dir)
-            .map(|_| ())
-            .map_err(Into::into);
-        self.keep(result);
+        self.write_summary_and_report();
         self.inner.episode_done(record)
     }
     fn checkpoint(&mut self, state: &LoopState) {
@@ -523,16 +528,7 @@ impl LoopObserver for Recorder<'_> {
         if state.completed == 0 && self.summary.episodes.is_empty() {
             // The first update can take minutes (vilta-var's about eight): the initial roll-out
             // is summarised and reported now, so `vicpilco report` and a browser show it meanwhile.
-            self.summary.wall_s = self.wall_s();
-            if let Some(claims) = &self.claims {
-                self.summary.thesis_reference = claims(&self.summary);
-            }
-            let result = self.summary.write(&self.dir).map_err(ExperimentError::from);
-            self.keep(result);
-            let result = vicpilco_report::write_report(&self.dir)
-                .map(|_| ())
-                .map_err(Into::into);
-            self.keep(result);
+            self.write_summary_and_report();
         }
         self.inner.checkpoint(state)
     }
