@@ -247,7 +247,10 @@ fn slope_ratio(previous: &PreviousSearch, x0: &[f64], slope: f64) -> Option<f64>
 
 impl LineSearch<Vec<f64>, f64> for BoundedLineSearch {
     fn search_direction(&mut self, direction: Vec<f64>) {
-        self.direction = Some(direction.clone());
+        // Kept only for the slope-ratio rule, which needs it in `init`.
+        if self.max_slope_ratio.is_some() {
+            self.direction = Some(direction.clone());
+        }
         self.inner.search_direction(direction)
     }
     fn initial_step_length(&mut self, step_length: f64) -> Result<(), argmin::core::Error> {
