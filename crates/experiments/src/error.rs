@@ -66,7 +66,7 @@ pub enum ExperimentError {
         /// or "a run" when there is none to read.
         held: String,
     },
-    /// Another process is running in the directory (it holds [`record::LOCK_FILE`]'s lock).
+    /// Another process is running in the directory (it holds [`crate::record::LOCK_FILE`]'s lock).
     #[error(
         "{} is in use by another vicpilco process (a run still going there): wait for it to \
          end or stop it, then --resume",
@@ -76,7 +76,7 @@ pub enum ExperimentError {
         /// The run directory.
         dir: PathBuf,
     },
-    /// [`own::run_own`] was given options or a name that belong to the named experiments, or
+    /// [`crate::own::run_own`] was given options or a name that belong to the named experiments, or
     /// a seed other than its setup's.
     #[error("run of a system of your own: {0}")]
     OwnRun(String),
