@@ -251,17 +251,18 @@ where
     let mut step_shrink = 1.0;
     let memo_evals = Cell::new(0usize);
     let mut gnorm = grad.iter().map(|v| v * v).sum::<f64>().sqrt();
-    if gnorm <= opts.grad_tol {
-        return Some(MinimizeResult {
-            x: best_x,
-            value: best_f,
-            iterations,
-            evaluations,
-            termination: Termination::GradientNorm,
-            slope_capped,
-        });
-    }
     for restart in 0..=MAX_RESTARTS {
+        // At the start, and at the best point a failed line search restarts from.
+        if gnorm <= opts.grad_tol {
+            return Some(MinimizeResult {
+                x: best_x,
+                value: best_f,
+                iterations,
+                evaluations,
+                termination: Termination::GradientNorm,
+                slope_capped,
+            });
+        }
         let scale = step_shrink / gnorm.max(1.0);
         // Seed the memo with the start point, which is already evaluated.
         let seed = (
@@ -349,16 +350,6 @@ where
         best_f = v;
         grad = g;
         gnorm = grad.iter().map(|v| v * v).sum::<f64>().sqrt();
-        if gnorm <= opts.grad_tol {
-            return Some(MinimizeResult {
-                x: best_x,
-                value: best_f,
-                iterations,
-                evaluations,
-                termination: Termination::GradientNorm,
-                slope_capped,
-            });
-        }
         step_shrink *= 0.1;
     }
     unreachable!("the restart loop returns on its last pass")
