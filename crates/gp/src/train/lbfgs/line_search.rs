@@ -25,6 +25,13 @@ pub(super) struct SlopeMemory {
     capped: Cell<usize>,
 }
 
+impl SlopeMemory {
+    /// How many line searches had their first trial step shortened by the slope-ratio cap.
+    pub(super) fn capped(&self) -> usize {
+        self.capped.get()
+    }
+}
+
 /// More–Thuente, stopped after a fixed number of trial points (PILCO's MFEPLS), with its first
 /// trial step capped by PILCO's maximum slope ratio.
 ///
@@ -40,13 +47,6 @@ pub(super) struct BoundedLineSearch {
     max_slope_ratio: Option<f64>,
     direction: Option<Vec<f64>>,
     memory: Rc<SlopeMemory>,
-}
-
-impl SlopeMemory {
-    /// How many line searches had their first trial step shortened by the slope-ratio cap.
-    pub(super) fn capped(&self) -> usize {
-        self.capped.get()
-    }
 }
 
 impl BoundedLineSearch {
